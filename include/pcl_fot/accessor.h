@@ -1,0 +1,133 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <type_traits>
+
+#include <pcl_fot/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+[[noreturn]] void throwKeyOutOfRange(const char* where, const Key& key);
+
+/**
+ * LineBurstAccess (paper §II): a handle that remembers the root-to-leaf path of its last access and starts
+ * the next one at the deepest common ancestor of the old and new keys. Consecutive points of a range image
+ * and consecutive cells of a ray share all but the lowest levels, so most accesses touch one or two words.
+ *
+ * The path holds pool offsets, which survive pool growth. Any structural change made elsewhere bumps the
+ * tree's structure version, and the accessor then restarts from the root; changes it makes itself keep
+ * its path valid. With line_burst = false every access starts at the root; results are identical.
+ *
+ * One accessor per thread: an accessor is cheap to make and is not shared.
+ */
+template <typename TreeT>
+class BasicAccessor {
+ public:
+  explicit BasicAccessor(TreeT& tree, bool line_burst = true) : tree_(&tree), line_burst_(line_burst) {}
+
+  bool lineBurst() const { return line_burst_; }
+  TreeT& tree() const { return *tree_; }
+
+  CellState getCell(const Key& key) {
+    const std::uint32_t x = tree_coord::fromKey(key.x), y = tree_coord::fromKey(key.y),
+                        z = tree_coord::fromKey(key.z);
+    // Keys beyond the range map to coordinates no write can reach, so they read as Unknown.
+    if (!locate(x, y, z)) return CellState::Unknown;
+    return node::state(tree_->words_[path_[bottom_]], tree_coord::octant(x, y, z, bottom_));
+  }
+
+  /** Throws std::out_of_range for keys outside [kMinKey, kMaxKey], MemoryLimitError past the pool cap. */
+  void setCell(const Key& key, CellState state) {
+    if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::setCell", key);
+    setValidCell(key, state);
+  }
+
+  /** setCell for a key the caller has already checked with isValidKey(). */
+  void setValidCell(const Key& key, CellState state) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    const std::uint32_t x = tree_coord::fromKey(key.x), y = tree_coord::fromKey(key.y),
+                        z = tree_coord::fromKey(key.z);
+    if (!locate(x, y, z)) {
+      if (state == CellState::Unknown) return;  // erasing outside the extent changes nothing
+      tree_->growToCover(x, y, z);
+      locate(x, y, z);
+    }
+    FastOctTree& t = *tree_;
+    const std::size_t at = path_[bottom_];
+    const NodeWord w = t.words_[at];
+    const unsigned octant = tree_coord::octant(x, y, z, bottom_);
+    const CellState old = node::state(w, octant);
+    if (old == state) return;
+    if (bottom_ == 1) {
+      const NodeWord updated = node::withState(w, octant, state);
+      t.words_[at] = updated;
+      if (node::isUniform(updated)) bottom_ = t.collapseFrom(path_, 1);
+    } else {
+      t.expandTo(path_, bottom_, x, y, z);
+      bottom_ = 1;
+      NodeWord& leaf = t.words_[path_[1]];
+      leaf = node::withState(leaf, tree_coord::octant(x, y, z, 1), state);
+    }
+    t.recount(old, state);
+    version_ = t.version_;
+  }
+
+  void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
+
+  /** Forgets the cached path; the next access starts at the root. */
+  void reset() { version_ = kNoPath; }
+
+ private:
+  static constexpr std::uint64_t kNoPath = ~std::uint64_t(0);
+
+  /** Finds the bitmap word holding (x, y, z): path_[bottom_]. False outside the root. */
+  bool locate(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    const TreeT& t = *tree_;
+    unsigned level;
+    if (line_burst_ && version_ == t.version_) {
+      level = tree_coord::commonLevel(x ^ x_, y ^ y_, z ^ z_);
+      if (level > t.root_level_) return false;
+      if (level < bottom_) level = bottom_;
+    } else {
+      if (((x ^ t.base_[0]) | (y ^ t.base_[1]) | (z ^ t.base_[2])) >> t.root_level_) return false;
+      level = t.root_level_;
+      path_[level] = 0;
+      bottom_ = level;
+      version_ = t.version_;
+    }
+    const NodeWord* words = t.words_.data();
+    std::size_t at = path_[level];
+    if (level > bottom_) {
+      // The new node one level down is a sibling of the cached one: address it without a load.
+      at = (path_[level - 1] & ~std::size_t(7)) | tree_coord::octant(x, y, z, level);
+      path_[--level] = at;
+    }
+    NodeWord w = words[at];
+    while (!node::isBitmap(w)) {
+      at = node::childBase(w) + tree_coord::octant(x, y, z, level);
+      path_[--level] = at;
+      w = words[at];
+    }
+    bottom_ = level;
+    x_ = x;
+    y_ = y;
+    z_ = z;
+    return true;
+  }
+
+  TreeT* tree_;
+  bool line_burst_;
+  std::uint64_t version_ = kNoPath;
+  std::uint32_t x_ = 0, y_ = 0, z_ = 0;  // last key, tree coordinates
+  unsigned bottom_ = 1;                  // level of the bitmap word at the end of the path
+  std::size_t path_[kMaxLevel + 1];      // path_[l]: pool offset of the level-l word on the path
+};
+
+using Accessor = BasicAccessor<FastOctTree>;
+using ConstAccessor = BasicAccessor<const FastOctTree>;
+
+}  // namespace fot
+}  // namespace pcl

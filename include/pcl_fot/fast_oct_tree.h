@@ -1,0 +1,231 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include <pcl_fot/key.h>
+#include <pcl_fot/node_word.h>
+
+namespace pcl {
+namespace fot {
+
+/** What a batch insertion did with its input. */
+struct InsertStats {
+  std::size_t inserted = 0;      ///< points or keys written
+  std::size_t non_finite = 0;    ///< NaN or Inf points, skipped
+  std::size_t out_of_range = 0;  ///< points or keys beyond the key range, skipped
+};
+
+/** A uniform cube of 2^level cells per axis whose lowest corner is `min_key`. A voxel has level 0. */
+struct Region {
+  Key min_key;
+  unsigned level;
+  CellState state;
+};
+
+/** Thrown when an operation would grow the pool beyond the cap set with setMaxMemoryBytes(). */
+class MemoryLimitError : public std::length_error {
+ public:
+  using std::length_error::length_error;
+};
+
+template <typename TreeT>
+class BasicAccessor;
+
+/**
+ * The FastOctTree of Poppinga et al. (SSRR 2007): an occupancy octree of 4-byte node words.
+ *
+ * Cells are addressed by integer keys on a VoxelGrid. The root is one word; every other word lives in a
+ * block of 8 siblings in a pool, and blocks are recycled through a free list. Uniform octants collapse
+ * into one bitmap word of their parent after every write, so the tree is always in canonical form: its
+ * shape depends only on its cells, never on the order of writes. The root grows on demand to cover
+ * new keys in any direction.
+ *
+ * Repeated access should go through an Accessor (LineBurstAccess, see accessor.h). Const members are
+ * safe to call from many threads at once; writes need exclusive access.
+ */
+class FastOctTree {
+ public:
+  using Ptr = std::shared_ptr<FastOctTree>;
+  using ConstPtr = std::shared_ptr<const FastOctTree>;
+
+  explicit FastOctTree(double resolution, double origin_x = 0.0, double origin_y = 0.0,
+                       double origin_z = 0.0);
+  explicit FastOctTree(const VoxelGrid& grid);
+
+  const VoxelGrid& getGrid() const { return grid_; }
+  double getResolution() const { return grid_.resolution(); }
+
+  /** Unknown outside the mapped extent. */
+  CellState getCell(const Key& key) const;
+  /** Throws std::out_of_range for a key outside [kMinKey, kMaxKey]. */
+  void setCell(const Key& key, CellState state);
+  void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
+
+  /** Unknown beyond the representable range; throws std::invalid_argument for NaN or Inf. */
+  CellState getCellAtPoint(double x, double y, double z) const;
+  /** Throws std::invalid_argument for NaN or Inf and std::out_of_range beyond the key range. */
+  void setCellAtPoint(double x, double y, double z, CellState state);
+  void eraseCellAtPoint(double x, double y, double z) { setCellAtPoint(x, y, z, CellState::Unknown); }
+
+  /** Writes every valid key; invalid keys are skipped and counted. */
+  InsertStats insertKeys(const Key* keys, std::size_t count, CellState state = CellState::Occupied,
+                         bool line_burst = true);
+  /**
+   * Writes the cell of every point. Point i's x, y, z are the three floats at byte offset i * stride_bytes,
+   * which fits the layout of any PCL point type. NaN, Inf and out-of-range points are skipped and counted.
+   */
+  InsertStats insertPoints(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                           CellState state = CellState::Occupied, bool line_burst = true);
+
+  /** Visits every maximal non-unknown uniform cube in Morton order: visit(const Region&). */
+  template <typename Visitor>
+  void forEachRegion(Visitor&& visit) const;
+  /** Visits every cell holding `state` (other than Unknown) in Morton order: visit(const Key&). */
+  template <typename Visitor>
+  void forEachCell(CellState state, Visitor&& visit) const;
+
+  std::uint64_t getOccupiedCount() const { return counts_[std::size_t(CellState::Occupied)]; }
+  std::uint64_t getFreeCount() const { return counts_[std::size_t(CellState::Free)]; }
+  bool empty() const { return words_[0] == node::uniform(CellState::Unknown); }
+
+  /** Blocks of 8 words in use. */
+  std::size_t getBlockCount() const { return live_blocks_; }
+  /** Node words in use: the root plus 8 per block. */
+  std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
+  /** Every byte the tree holds: the object and the pool's allocation, free blocks included. */
+  std::size_t getMemoryBytes() const { return sizeof(*this) + words_.capacity() * sizeof(NodeWord); }
+  /** Root level: the root spans 2^depth cells per axis. */
+  unsigned getDepth() const { return root_level_; }
+
+  /**
+   * Caps the pool. A write that would need more gets MemoryLimitError, and the tree stays as it was.
+   * The default is no cap.
+   */
+  void setMaxMemoryBytes(std::size_t bytes);
+  std::size_t getMaxMemoryBytes() const { return max_bytes_; }
+
+  /** Removes every cell and releases the pool. */
+  void clear();
+
+  /** Same grid and the same state in every cell. */
+  bool operator==(const FastOctTree& other) const;
+  bool operator!=(const FastOctTree& other) const { return !(*this == other); }
+
+  /** Low-level read access, for algorithms built on the tree (search, ψ, io). */
+  NodeWord rootWord() const { return words_[0]; }
+  unsigned rootLevel() const { return root_level_; }
+  /** Lowest corner of the root cube in tree coordinates (see tree_coord). */
+  const std::array<std::uint32_t, 3>& rootBase() const { return base_; }
+  const NodeWord* words() const { return words_.data(); }
+  std::size_t poolWords() const { return words_.size(); }
+  /** Changes whenever blocks are allocated, freed or re-linked; accessors restart from the root then. */
+  std::uint64_t structureVersion() const { return version_; }
+
+ private:
+  template <typename>
+  friend class BasicAccessor;
+
+  static constexpr std::uint32_t kNoBlock = 0;  // block 0 holds the root word, so it is never free
+
+  /** Makes room for n more blocks, or throws before anything changes. */
+  void reserveBlocks(std::size_t n);
+  std::uint32_t allocBlock();
+  void freeBlock(std::uint32_t block);
+
+  /** Grows the root until it covers (x, y, z), in tree coordinates. */
+  void growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /**
+   * Expands the bitmap word at path[level] down to level 1 along (x, y, z), filling path[level-1..1].
+   * Each new block holds the expanded octant states, so the cells keep their values.
+   */
+  void expandTo(std::size_t* path, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
+  unsigned collapseFrom(const std::size_t* path, unsigned level);
+
+  void recount(CellState from, CellState to) {
+    --counts_[std::size_t(from)];
+    ++counts_[std::size_t(to)];
+  }
+
+  /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
+  template <typename Visitor>
+  static void visitCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, Visitor& visit);
+  template <typename Visitor>
+  void visitRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                    Visitor& visit) const;
+
+  VoxelGrid grid_;
+  std::vector<NodeWord> words_;  // block b is words_[8b .. 8b+7]; words_[0] is the root
+  unsigned root_level_ = 1;
+  std::array<std::uint32_t, 3> base_{};
+  std::uint32_t free_head_ = kNoBlock;
+  std::size_t free_blocks_ = 0;
+  std::size_t live_blocks_ = 0;
+  std::size_t max_bytes_ = std::numeric_limits<std::size_t>::max();
+  std::uint64_t version_ = 0;
+  std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
+};
+
+template <typename Visitor>
+void FastOctTree::forEachRegion(Visitor&& visit) const {
+  const NodeWord root = words_[0];
+  if (node::isUniform(root)) {  // one cube, whatever level the root happens to have grown to
+    if (node::uniformState(root) != CellState::Unknown)
+      visit(Region{Key{tree_coord::toKey(base_[0]), tree_coord::toKey(base_[1]), tree_coord::toKey(base_[2])},
+                   root_level_, node::uniformState(root)});
+    return;
+  }
+  visitRegions(root, root_level_, base_[0], base_[1], base_[2], visit);
+}
+
+template <typename Visitor>
+void FastOctTree::visitRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                               Visitor& visit) const {
+  const unsigned child_level = level - 1;
+  const std::uint32_t size = 1u << child_level;
+  const std::size_t first = node::childBase(w);
+  for (unsigned o = 0; o < 8; ++o) {
+    const std::uint32_t cx = x + (o & 1u) * size, cy = y + ((o >> 1) & 1u) * size,
+                        cz = z + ((o >> 2) & 1u) * size;
+    if (node::isBitmap(w)) {
+      const CellState s = node::state(w, o);
+      if (s != CellState::Unknown)
+        visit(
+            Region{Key{tree_coord::toKey(cx), tree_coord::toKey(cy), tree_coord::toKey(cz)}, child_level, s});
+    } else {
+      visitRegions(words_[first + o], child_level, cx, cy, cz, visit);
+    }
+  }
+}
+
+template <typename Visitor>
+void FastOctTree::forEachCell(CellState state, Visitor&& visit) const {
+  if (state == CellState::Unknown)
+    throw std::invalid_argument("pcl::fot::FastOctTree::forEachCell: unknown cells are not enumerable");
+  forEachRegion([&](const Region& r) {
+    if (r.state == state)
+      visitCube(tree_coord::fromKey(r.min_key.x), tree_coord::fromKey(r.min_key.y),
+                tree_coord::fromKey(r.min_key.z), r.level, visit);
+  });
+}
+
+template <typename Visitor>
+void FastOctTree::visitCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level,
+                            Visitor& visit) {
+  if (level == 0) {
+    visit(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
+    return;
+  }
+  const std::uint32_t size = 1u << (level - 1);
+  for (unsigned o = 0; o < 8; ++o)
+    visitCube(x + (o & 1u) * size, y + ((o >> 1) & 1u) * size, z + ((o >> 2) & 1u) * size, level - 1, visit);
+}
+
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,18 @@
+#pragma once
+
+#include <string>
+
+namespace pcl {
+namespace fot {
+namespace io {
+
+/**
+ * Writes `bytes` to a temporary file beside `path`, flushes it to disk, then renames it over `path`.
+ * A crash at any moment leaves either the old file or the new one, never half of one.
+ * Throws std::runtime_error with the system's reason on failure; the temporary file is removed.
+ */
+void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+}  // namespace io
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,89 @@
+#pragma once
+
+#include <cstdint>
+
+#include <pcl_fot/key.h>
+
+namespace pcl {
+namespace fot {
+
+/**
+ * One FastOctTree node: a single 32-bit word (paper §II).
+ *
+ * Tag bit 0 set: a bitmap word. Bits 16..31 hold the states of the node's 8 octants, 2 bits each
+ * (octant i at bits 16+2i), and bits 1..15 are zero. At level 1 the octants are voxels: the paper's
+ * FOT leaf. Above level 1 each octant is a uniform region.
+ * Tag bit 0 clear: a reference, the index of the pool block that holds the 8 child words.
+ */
+using NodeWord = std::uint32_t;
+static_assert(sizeof(NodeWord) == 4, "a FastOctTree node is exactly one 32-bit word");
+
+namespace node {
+
+constexpr NodeWord kBitmapTag = 1u;
+constexpr unsigned kStateShift = 16;
+/** Largest block index a reference word can hold. */
+constexpr std::uint32_t kMaxBlocks = 0x7FFFFFFFu;
+
+constexpr bool isBitmap(NodeWord w) {
+  return (w & kBitmapTag) != 0;
+}
+constexpr NodeWord reference(std::uint32_t block) {
+  return block << 1;
+}
+constexpr std::uint32_t block(NodeWord w) {
+  return w >> 1;
+}
+/** Pool offset of a reference's first child word. */
+constexpr std::size_t childBase(NodeWord w) {
+  return std::size_t(w >> 1) * 8;
+}
+
+constexpr CellState state(NodeWord w, unsigned octant) {
+  return CellState((w >> (kStateShift + 2 * octant)) & 3u);
+}
+
+constexpr NodeWord withState(NodeWord w, unsigned octant, CellState s) {
+  const unsigned shift = kStateShift + 2 * octant;
+  return (w & ~(3u << shift)) | (NodeWord(s) << shift);
+}
+
+/** A bitmap whose 8 octants all hold `s`. */
+constexpr NodeWord uniform(CellState s) {
+  return kBitmapTag | ((NodeWord(s) * 0x5555u) << kStateShift);
+}
+
+constexpr bool isUniform(NodeWord w) {
+  const NodeWord states = w >> kStateShift;
+  return isBitmap(w) && states == (states & 3u) * 0x5555u;
+}
+
+/** The state of a uniform bitmap. */
+constexpr CellState uniformState(NodeWord w) {
+  return CellState((w >> kStateShift) & 3u);
+}
+
+/** Gathers bits 0, 2, 4, .. 14 of x into bits 0..7. */
+constexpr std::uint32_t compressEven(std::uint32_t x) {
+  x &= 0x5555u;
+  x = (x | (x >> 1)) & 0x3333u;
+  x = (x | (x >> 2)) & 0x0F0Fu;
+  return (x | (x >> 4)) & 0x00FFu;
+}
+
+/** 8-bit mask of the octants holding `s` (state 3 never occurs, so one bit of each pair decides). */
+constexpr std::uint32_t octantMask(NodeWord w, CellState s) {
+  const std::uint32_t states = w >> kStateShift;
+  switch (s) {
+    case CellState::Occupied:
+      return compressEven(states >> 1);
+    case CellState::Free:
+      return compressEven(states);
+    default:
+      return ~(compressEven(states >> 1) | compressEven(states)) & 0xFFu;
+  }
+}
+
+}  // namespace node
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs everything pcl_fot needs from Debian 12's own packages. Idempotent: when every package is
+# already there it only asks dpkg, which takes well under a second.
+set -euo pipefail
+
+packages=(
+  cmake make g++ pkg-config                          # build
+  libpcl-dev pcl-tools libeigen3-dev libflann-dev   # PCL, Eigen, FLANN
+  libboost-dev googletest libgtest-dev              # Boost, GoogleTest
+  liboctomap-dev libnanoflann-dev libbenchmark-dev  # reference peers for tests and benchmarks
+  xvfb x11-apps imagemagick xdotool                 # pcl_viewer screenshots under a virtual display
+  gnuplot-nox                                       # benchmark plots
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "Installing: ${missing[*]}"
+$sudo apt-get update -q
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"

@@ -1,0 +1,257 @@
+#include <pcl_fot/fast_oct_tree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <pcl_fot/accessor.h>
+
+namespace pcl {
+namespace fot {
+
+void throwKeyOutOfRange(const char* where, const Key& key) {
+  throw std::out_of_range(std::string(where) + ": key " + toString(key) +
+                          " is outside the supported range [" + std::to_string(kMinKey) + ", " +
+                          std::to_string(kMaxKey) + "] per axis");
+}
+
+FastOctTree::FastOctTree(double resolution, double origin_x, double origin_y, double origin_z)
+    : FastOctTree(VoxelGrid(resolution, origin_x, origin_y, origin_z)) {}
+
+FastOctTree::FastOctTree(const VoxelGrid& grid) : grid_(grid), words_(8, 0) {
+  words_[0] = node::uniform(CellState::Unknown);
+}
+
+CellState FastOctTree::getCell(const Key& key) const {
+  return ConstAccessor(*this, false).getCell(key);
+}
+
+void FastOctTree::setCell(const Key& key, CellState state) {
+  Accessor(*this, false).setCell(key, state);
+}
+
+CellState FastOctTree::getCellAtPoint(double x, double y, double z) const {
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+    throw std::invalid_argument("pcl::fot::FastOctTree::getCellAtPoint: the point is not finite");
+  Key key;
+  return grid_.pointToKey(x, y, z, key) ? getCell(key) : CellState::Unknown;
+}
+
+void FastOctTree::setCellAtPoint(double x, double y, double z, CellState state) {
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+    throw std::invalid_argument("pcl::fot::FastOctTree::setCellAtPoint: the point is not finite");
+  Key key;
+  if (!grid_.pointToKey(x, y, z, key))
+    throw std::out_of_range("pcl::fot::FastOctTree::setCellAtPoint: the point lies beyond the key range of " +
+                            std::to_string(kMaxKey) + " cells from the map origin");
+  setCell(key, state);
+}
+
+InsertStats FastOctTree::insertKeys(const Key* keys, std::size_t count, CellState state, bool line_burst) {
+  Accessor accessor(*this, line_burst);
+  InsertStats stats;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!isValidKey(keys[i])) {
+      ++stats.out_of_range;
+      continue;
+    }
+    accessor.setCell(keys[i], state);
+    ++stats.inserted;
+  }
+  return stats;
+}
+
+InsertStats FastOctTree::insertPoints(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                                      CellState state, bool line_burst) {
+  Accessor accessor(*this, line_burst);
+  InsertStats stats;
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
+    Key key;
+    if (grid_.pointToKey(p[0], p[1], p[2], key)) {
+      accessor.setValidCell(key, state);
+      ++stats.inserted;
+    } else if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) {
+      ++stats.out_of_range;
+    } else {
+      ++stats.non_finite;
+    }
+  }
+  return stats;
+}
+
+void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {
+  max_bytes_ = bytes;
+}
+
+void FastOctTree::reserveBlocks(std::size_t n) {
+  if (n <= free_blocks_) return;
+  const std::size_t fresh = n - free_blocks_;
+  const std::size_t blocks = words_.size() / 8 + fresh;
+  const std::size_t bytes = blocks * 8 * sizeof(NodeWord);
+  if (bytes > max_bytes_)
+    throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
+                           " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");
+  if (blocks > node::kMaxBlocks)
+    throw MemoryLimitError("pcl::fot::FastOctTree: the pool would exceed 2^31 blocks");
+  if (blocks * 8 > words_.capacity()) {
+    const std::size_t cap_words = max_bytes_ / sizeof(NodeWord);
+    words_.reserve(std::max(blocks * 8, std::min(words_.capacity() * 2, cap_words)));
+  }
+}
+
+std::uint32_t FastOctTree::allocBlock() {
+  ++live_blocks_;
+  if (free_head_ != kNoBlock) {
+    const std::uint32_t block = free_head_;
+    free_head_ = words_[std::size_t(block) * 8];
+    --free_blocks_;
+    return block;
+  }
+  const std::uint32_t block = std::uint32_t(words_.size() / 8);
+  words_.resize(words_.size() + 8);  // within the capacity reserveBlocks made
+  return block;
+}
+
+void FastOctTree::freeBlock(std::uint32_t block) {
+  words_[std::size_t(block) * 8] = free_head_;
+  free_head_ = block;
+  ++free_blocks_;
+  --live_blocks_;
+}
+
+void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  ++version_;
+  if (empty()) {  // nothing to keep: re-anchor a small root at the key
+    root_level_ = 1;
+    base_ = {x & ~1u, y & ~1u, z & ~1u};
+    return;
+  }
+  const unsigned target = tree_coord::commonLevel(x ^ base_[0], y ^ base_[1], z ^ base_[2]);
+  reserveBlocks(target - root_level_);
+  while (root_level_ < target) {
+    const NodeWord root = words_[0];
+    const unsigned octant = tree_coord::octant(base_[0], base_[1], base_[2], root_level_ + 1);
+    if (node::isUniform(root)) {
+      // A uniform root folds straight into one octant of its parent: no block needed.
+      words_[0] = node::withState(node::uniform(CellState::Unknown), octant, node::uniformState(root));
+    } else {
+      const std::uint32_t block = allocBlock();
+      const std::size_t first = std::size_t(block) * 8;
+      std::fill_n(words_.begin() + first, 8, node::uniform(CellState::Unknown));
+      words_[first + octant] = root;
+      words_[0] = node::reference(block);
+    }
+    ++root_level_;
+    const std::uint32_t mask = ~((std::uint32_t(1) << root_level_) - 1);
+    for (auto& b : base_) b &= mask;
+  }
+}
+
+void FastOctTree::expandTo(std::size_t* path, unsigned level, std::uint32_t x, std::uint32_t y,
+                           std::uint32_t z) {
+  reserveBlocks(level - 1);
+  ++version_;
+  NodeWord w = words_[path[level]];
+  while (level > 1) {
+    const std::uint32_t block = allocBlock();
+    const std::size_t first = std::size_t(block) * 8;
+    for (unsigned o = 0; o < 8; ++o) words_[first + o] = node::uniform(node::state(w, o));
+    words_[path[level]] = node::reference(block);
+    const std::size_t at = first + tree_coord::octant(x, y, z, level);
+    path[--level] = at;
+    w = words_[at];
+  }
+}
+
+unsigned FastOctTree::collapseFrom(const std::size_t* path, unsigned level) {
+  while (level < root_level_) {
+    const std::size_t first = path[level] & ~std::size_t(7);
+    NodeWord parent = node::kBitmapTag;
+    for (unsigned o = 0; o < 8; ++o) {
+      const NodeWord w = words_[first + o];
+      if (!node::isUniform(w)) return level;
+      parent |= NodeWord(node::uniformState(w)) << (node::kStateShift + 2 * o);
+    }
+    words_[path[level + 1]] = parent;
+    freeBlock(std::uint32_t(first / 8));
+    ++version_;
+    ++level;
+    if (!node::isUniform(parent)) return level;
+  }
+  return level;
+}
+
+void FastOctTree::clear() {
+  std::vector<NodeWord>(8, 0).swap(words_);
+  words_[0] = node::uniform(CellState::Unknown);
+  root_level_ = 1;
+  base_ = {0, 0, 0};
+  free_head_ = kNoBlock;
+  free_blocks_ = 0;
+  live_blocks_ = 0;
+  counts_ = {0, 0, 0};
+  ++version_;
+}
+
+namespace {
+
+/** A node seen through its content: the smallest cube that holds all of a tree's known cells. */
+struct Cube {
+  NodeWord word;
+  unsigned level;
+  std::array<std::uint32_t, 3> base;
+};
+
+/**
+ * Descends while only one octant holds anything. Canonical form holds below the root, so two trees with
+ * the same cells reach the same cube with the same word.
+ */
+Cube contentCube(const FastOctTree& t) {
+  Cube c{t.rootWord(), t.rootLevel(), t.rootBase()};
+  while (c.level > 1) {
+    const std::uint32_t half = 1u << (c.level - 1);
+    unsigned only = 8;
+    NodeWord child = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      NodeWord w;
+      if (node::isBitmap(c.word)) {
+        // A uniform octant of a bitmap reads as a uniform word one level down.
+        w = node::uniform(node::state(c.word, o));
+      } else {
+        w = t.words()[node::childBase(c.word) + o];
+      }
+      if (w == node::uniform(CellState::Unknown)) continue;
+      if (only != 8) return c;
+      only = o;
+      child = w;
+    }
+    if (only == 8) return c;  // empty
+    c.base = {c.base[0] + (only & 1u) * half, c.base[1] + ((only >> 1) & 1u) * half,
+              c.base[2] + ((only >> 2) & 1u) * half};
+    c.word = child;
+    --c.level;
+  }
+  return c;
+}
+
+bool sameSubtree(const FastOctTree& a, NodeWord wa, const FastOctTree& b, NodeWord wb) {
+  if (node::isBitmap(wa) || node::isBitmap(wb)) return wa == wb;
+  const std::size_t fa = node::childBase(wa), fb = node::childBase(wb);
+  for (unsigned o = 0; o < 8; ++o)
+    if (!sameSubtree(a, a.words()[fa + o], b, b.words()[fb + o])) return false;
+  return true;
+}
+
+}  // namespace
+
+bool FastOctTree::operator==(const FastOctTree& other) const {
+  if (grid_ != other.grid_ || counts_ != other.counts_) return false;
+  if (empty() || other.empty()) return empty() == other.empty();
+  const Cube a = contentCube(*this), b = contentCube(other);
+  return a.level == b.level && a.base == b.base && sameSubtree(*this, a.word, other, b.word);
+}
+
+}  // namespace fot
+}  // namespace pcl

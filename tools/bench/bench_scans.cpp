@@ -1,0 +1,44 @@
+#include "bench_scans.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <pcl/common/common.h>
+#include <pcl/io/pcd_io.h>
+
+namespace fot_bench {
+
+std::vector<BenchScan> loadBenchScans(const std::string& data_dir) {
+  struct Spec {
+    const char* name;
+    double resolution;
+    bool has_sensor;
+  };
+  const Spec specs[] = {{"kinect_capture0001", 0.01, true}, {"kinect_capture0002", 0.01, true},
+                        {"kinect_capture0003", 0.01, true}, {"room_scan1", 0.05, true},
+                        {"room_scan2", 0.05, true},         {"terrain_samp11", 0.30, false}};
+  std::vector<BenchScan> scans;
+  for (const Spec& s : specs) {
+    BenchScan scan{s.name, s.resolution, s.has_sensor,
+                   pcl::PointCloud<pcl::PointXYZ>::Ptr(new pcl::PointCloud<pcl::PointXYZ>), 0};
+    const std::string path = data_dir + "/" + s.name + ".pcd";
+    if (pcl::io::loadPCDFile(path, *scan.cloud) != 0) throw std::runtime_error("cannot read " + path);
+    if (!s.has_sensor) {
+      pcl::PointXYZ lo, hi;
+      pcl::getMinMax3D(*scan.cloud, lo, hi);
+      const float cx = std::round(0.5f * (lo.x + hi.x)), cy = std::round(0.5f * (lo.y + hi.y)),
+                  cz = std::round(0.5f * (lo.z + hi.z));
+      for (auto& p : *scan.cloud) {
+        p.x -= cx;
+        p.y -= cy;
+        p.z -= cz;
+      }
+    }
+    for (const auto& p : *scan.cloud)
+      scan.finite += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    scans.push_back(scan);
+  }
+  return scans;
+}
+
+}  // namespace fot_bench
