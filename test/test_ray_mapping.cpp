@@ -1,0 +1,270 @@
+// Ray tracing and scan insertion, checked cell for cell against OctoMap on real scans.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <octomap/OcTree.h>
+#include <pcl/common/transforms.h>
+
+#include <pcl_fot/cast_ray.h>
+#include <pcl_fot/fast_occ_mesh.h>
+#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/ray_caster.h>
+
+#include "scan_data.h"
+
+using namespace pcl::fot;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace {
+
+constexpr int kOctoMapKeyOffset = 32768;
+
+/** A real scan in its map frame: its VIEWPOINT applied, as insertScan does. */
+Cloud::Ptr scanInMapFrame(const std::string& name) {
+  const auto raw = pcl_fot_test::loadScan(name);
+  const Eigen::Affine3f pose = Eigen::Translation3f(raw->sensor_origin_.head<3>()) * raw->sensor_orientation_;
+  Cloud::Ptr out(new Cloud);
+  pcl::transformPointCloud(*raw, *out, pose);
+  return out;
+}
+
+Key fromOctoMap(const octomap::OcTreeKey& k) {
+  return Key{int(k[0]) - kOctoMapKeyOffset, int(k[1]) - kOctoMapKeyOffset, int(k[2]) - kOctoMapKeyOffset};
+}
+
+std::vector<Key> ourRay(const VoxelGrid& grid, const float o[3], const float e[3]) {
+  std::vector<Key> keys;
+  EXPECT_TRUE(traceSegment(grid, o, e, [&](const Key& k) { keys.push_back(k); }));
+  return keys;
+}
+
+void expectSameRaysAsOctoMap(const Cloud& cloud, double res, const float origin[3]) {
+  octomap::OcTree reference(res);
+  octomap::KeyRay ray;
+  const VoxelGrid grid(res);
+  std::size_t rays = 0, keys = 0;
+  for (const auto& p : cloud) {
+    if (!std::isfinite(p.x)) continue;
+    ASSERT_TRUE(reference.computeRayKeys(octomap::point3d(origin[0], origin[1], origin[2]),
+                                         octomap::point3d(p.x, p.y, p.z), ray));
+    const float end[3] = {p.x, p.y, p.z};
+    const std::vector<Key> ours = ourRay(grid, origin, end);
+    ASSERT_EQ(ours.size(), ray.size()) << "ray " << rays << " to (" << p.x << ", " << p.y << ", " << p.z << ")";
+    std::size_t i = 0;
+    for (const auto& k : ray) ASSERT_EQ(ours[i++], fromOctoMap(k)) << "ray " << rays << " cell " << i - 1;
+    ++rays;
+    keys += ray.size();
+  }
+  EXPECT_GT(rays, 10000u);
+  EXPECT_GT(keys, rays * 10) << "the rays must be long enough to mean something";
+}
+
+/** The cells OctoMap's tree knows, expanded from its (possibly pruned) leaves. */
+void octomapCells(const octomap::OcTree& tree, std::vector<Key>& occupied, std::vector<Key>& free) {
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    const int side = 1 << (tree.getTreeDepth() - it.getDepth());
+    const octomap::OcTreeKey base = it.getIndexKey();
+    auto& out = tree.isNodeOccupied(*it) ? occupied : free;
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+          const Key k = fromOctoMap(base);
+          out.push_back(Key{k.x + x, k.y + y, k.z + z});
+        }
+  }
+}
+
+void expectSameMapAsOctoMap(const Cloud& cloud, double res, double max_range) {
+  const float sensor[3] = {0, 0, 0};
+  octomap::OcTree reference(res);
+  octomap::Pointcloud scan;
+  for (const auto& p : cloud)
+    if (std::isfinite(p.x)) scan.push_back(p.x, p.y, p.z);
+  reference.insertPointCloud(scan, octomap::point3d(0, 0, 0), max_range);
+
+  FastOctTree tree(res);
+  ScanOptions options;
+  options.max_range = max_range;
+  const ScanStats stats = insertRays(tree, sensor, &cloud[0].x, cloud.size(), sizeof(pcl::PointXYZ), options);
+  EXPECT_EQ(stats.rays, scan.size());
+
+  std::vector<Key> occupied, free;
+  octomapCells(reference, occupied, free);
+  EXPECT_EQ(tree.getOccupiedCount(), occupied.size());
+  EXPECT_EQ(tree.getFreeCount(), free.size());
+  for (const Key& k : occupied) ASSERT_EQ(tree.getCell(k), CellState::Occupied) << toString(k);
+  for (const Key& k : free) ASSERT_EQ(tree.getCell(k), CellState::Free) << toString(k);
+  EXPECT_GT(free.size(), occupied.size());
+}
+
+}  // namespace
+
+TEST(RayCaster, SameCellsAsOctoMapOnEveryRayOfRoomScan1At5cm) {
+  const float origin[3] = {0, 0, 0};
+  expectSameRaysAsOctoMap(*scanInMapFrame("room_scan1.pcd"), 0.05, origin);
+}
+
+TEST(RayCaster, SameCellsAsOctoMapOnEveryRayOfAKinectFrameAt1cm) {
+  const float origin[3] = {0, 0, 0};
+  expectSameRaysAsOctoMap(*scanInMapFrame("kinect_capture0001.pcd"), 0.01, origin);
+}
+
+TEST(RayCaster, SameCellsAsOctoMapFromAnOffCentreSensor) {
+  const float origin[3] = {0.337f, -1.2049f, 0.71f};  // not on any cell boundary
+  expectSameRaysAsOctoMap(*scanInMapFrame("room_scan2.pcd"), 0.05, origin);
+}
+
+TEST(RayCaster, SegmentEndsExcludeTheEndCell) {
+  const VoxelGrid grid(1.0);
+  const float o[3] = {0.5f, 0.5f, 0.5f}, e[3] = {4.5f, 0.5f, 0.5f};
+  const std::vector<Key> keys = ourRay(grid, o, e);
+  ASSERT_EQ(keys.size(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(keys[i], (Key{i, 0, 0}));
+  EXPECT_TRUE(ourRay(grid, o, o).empty()) << "a ray inside one cell visits nothing";
+  const float nan[3] = {std::nanf(""), 0, 0};
+  EXPECT_FALSE(traceSegment(grid, o, nan, [](const Key&) { ADD_FAILURE(); }));
+}
+
+TEST(ScanInsertion, SameFreeAndOccupiedCellsAsOctoMapOnRoomScan1) {
+  expectSameMapAsOctoMap(*scanInMapFrame("room_scan1.pcd"), 0.05, -1.0);
+}
+
+TEST(ScanInsertion, SameFreeAndOccupiedCellsAsOctoMapOnAKinectFrame) {
+  expectSameMapAsOctoMap(*scanInMapFrame("kinect_capture0002.pcd"), 0.01, -1.0);
+}
+
+TEST(ScanInsertion, SameCellsAsOctoMapWithAMaximumRange) {
+  expectSameMapAsOctoMap(*scanInMapFrame("room_scan2.pcd"), 0.05, 4.0);
+}
+
+TEST(ScanInsertion, TreeAndGridAgreeCellForCell) {
+  const auto cloud = pcl_fot_test::loadScan("kinect_capture0003.pcd");
+  const VoxelGrid vg(0.02);
+  FastOctTree tree(vg), tree_plain(vg);
+  FastOccMesh grid(vg, 512);
+  ScanOptions plain;
+  plain.line_burst = false;
+  const ScanStats a = insertScan(tree, *cloud);
+  const ScanStats b = insertScan(grid, *cloud);
+  const ScanStats c = insertScan(tree_plain, *cloud, plain);
+  EXPECT_EQ(a.cells_written, b.cells_written);
+  EXPECT_EQ(a.cells_written, c.cells_written);
+  EXPECT_TRUE(tree == tree_plain) << "LineBurstAccess on and off give the same map";
+  EXPECT_EQ(tree.getOccupiedCount(), grid.getOccupiedCount());
+  EXPECT_EQ(tree.getFreeCount(), grid.getFreeCount());
+  for (CellState s : {CellState::Occupied, CellState::Free})
+    grid.forEachCell(s, [&](const Key& k) { ASSERT_EQ(tree.getCell(k), s) << toString(k); });
+}
+
+TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
+  auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  cloud->sensor_origin_ = Eigen::Vector4f(1.3f, -0.4f, 0.2f, 0.0f);
+  cloud->sensor_orientation_ = Eigen::Quaternionf(Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ()));
+  FastOctTree from_cloud(0.1), from_affine(0.1), from_matrix(0.1);
+  insertScan(from_cloud, *cloud);
+  const Eigen::Affine3f pose = Eigen::Translation3f(1.3f, -0.4f, 0.2f) *
+                               Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
+  insertScan(from_affine, *cloud, pose);
+  insertScan(from_matrix, *cloud, Eigen::Matrix4f(pose.matrix()));
+  EXPECT_TRUE(from_cloud == from_affine);
+  EXPECT_TRUE(from_cloud == from_matrix);
+  // The sensor's own cell lies on every ray: it is free.
+  EXPECT_EQ(from_cloud.getCellAtPoint(1.3, -0.4, 0.2), CellState::Free);
+}
+
+TEST(ScanInsertion, RangesNanAndPrecedence) {
+  Cloud cloud;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.push_back(pcl::PointXYZ(5.05f, 0.05f, 0.05f));    // endpoint in cell (50, 0, 0) at 0.1 m
+  cloud.push_back(pcl::PointXYZ(2.05f, 0.05f, 0.05f));    // endpoint on the first ray's path: occupied wins
+  cloud.push_back(pcl::PointXYZ(nan, 1.0f, 1.0f));
+  cloud.push_back(pcl::PointXYZ(0.0f, 30.05f, 0.05f));    // beyond max range: free up to 10 m only
+  cloud.push_back(pcl::PointXYZ(0.02f, 0.01f, 0.0f));     // within min range: ignored
+  FastOctTree tree(0.1);
+  ScanOptions options;
+  options.max_range = 10.0;
+  options.min_range = 0.05;
+  const ScanStats st = insertScan(tree, cloud, Eigen::Affine3f::Identity(), options);
+  EXPECT_EQ(st.non_finite, 1u);
+  EXPECT_EQ(st.too_close, 1u);
+  EXPECT_EQ(st.truncated, 1u);
+  EXPECT_EQ(st.rays, 3u);
+  EXPECT_EQ(st.occupied, 2u);
+  EXPECT_EQ(tree.getCell({50, 0, 0}), CellState::Occupied);
+  EXPECT_EQ(tree.getCell({20, 0, 0}), CellState::Occupied) << "occupied wins over free within a scan";
+  EXPECT_EQ(tree.getCell({49, 0, 0}), CellState::Free);
+  EXPECT_EQ(tree.getCell({0, 98, 0}), CellState::Free);
+  EXPECT_EQ(tree.getCell({0, 99, 0}), CellState::Unknown) << "the truncated ray ends at 10 m, end cell excluded";
+  EXPECT_EQ(tree.getCell({0, 300, 0}), CellState::Unknown) << "and marks no endpoint";
+  EXPECT_EQ(tree.getOccupiedCount(), 2u);
+
+  // A later scan's ray through an occupied cell frees it.
+  Cloud later;
+  later.push_back(pcl::PointXYZ(3.05f, 0.05f, 0.05f));
+  insertScan(tree, later, Eigen::Affine3f::Identity());
+  EXPECT_EQ(tree.getCell({20, 0, 0}), CellState::Free);
+  EXPECT_EQ(tree.getCell({30, 0, 0}), CellState::Occupied);
+}
+
+TEST(ScanInsertion, BadSensorPoseIsAnErrorAndChangesNothing) {
+  Cloud cloud;
+  cloud.push_back(pcl::PointXYZ(1, 1, 1));
+  FastOctTree tree(0.1);
+  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+  pose.translation() << std::nanf(""), 0, 0;
+  EXPECT_THROW(insertScan(tree, cloud, pose), std::invalid_argument);
+  pose.translation() << 1e9f, 0, 0;
+  EXPECT_THROW(insertScan(tree, cloud, pose), std::out_of_range);
+  EXPECT_TRUE(tree.empty());
+  EXPECT_EQ(insertScan(tree, Cloud(), Eigen::Affine3f::Identity()).rays, 0u) << "an empty cloud is fine";
+}
+
+TEST(CastRay, StopsAtTheFirstCellThatIsNotFree) {
+  FastOctTree tree(1.0);
+  for (int x = 0; x < 10; ++x) tree.setCell({x, 0, 0}, CellState::Free);
+  tree.setCell({10, 0, 0}, CellState::Occupied);
+  const float origin[3] = {0.5f, 0.5f, 0.5f}, along_x[3] = {1, 0, 0}, along_y[3] = {0, 2, 0};
+  Key hit;
+  EXPECT_TRUE(castRay(tree, origin, along_x, hit));
+  EXPECT_EQ(hit, (Key{10, 0, 0}));
+  EXPECT_FALSE(castRay(tree, origin, along_x, hit, 5.0)) << "beyond the maximum range";
+  EXPECT_FALSE(castRay(tree, origin, along_y, hit));
+  EXPECT_EQ(hit, (Key{0, 1, 0})) << "stops at the unknown cell";
+  EXPECT_FALSE(castRay(tree, origin, along_y, hit, -1.0, true)) << "ignoring unknown cells it leaves the map";
+  const float at_wall[3] = {10.5f, 0.5f, 0.5f};
+  EXPECT_TRUE(castRay(tree, at_wall, along_x, hit));
+  EXPECT_EQ(hit, (Key{10, 0, 0})) << "the origin's own cell counts";
+  const float zero[3] = {0, 0, 0};
+  EXPECT_THROW(castRay(tree, origin, zero, hit), std::invalid_argument);
+  const float far_away[3] = {1e6f, 1e6f, 1e6f}, back[3] = {-1, -1, -1};
+  EXPECT_FALSE(castRay(tree, far_away, back, hit, -1.0, true)) << "a ray that misses the map ends";
+}
+
+TEST(CastRay, SameAnswerOnTreeAndGridOverARealMap) {
+  const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  const VoxelGrid vg(0.05);
+  FastOctTree tree(vg);
+  FastOccMesh grid(vg, 1024);
+  insertScan(tree, *cloud);
+  insertScan(grid, *cloud);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const float origin[3] = {0.1f, 0.2f, 0.0f};
+  int hits = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const float dir[3] = {u(rng), u(rng), 0.3f * u(rng)};
+    Key a, b;
+    const bool ha = castRay(tree, origin, dir, a, 20.0, true), hb = castRay(grid, origin, dir, b, 20.0, true);
+    ASSERT_EQ(ha, hb);
+    if (ha) {
+      ASSERT_EQ(a, b);
+      ++hits;
+    }
+  }
+  EXPECT_GT(hits, 1000) << "rays from inside the room mostly hit a wall";
+}
