@@ -39,40 +39,53 @@ class BasicAccessor {
     return node::state(tree_->words_[path_[bottom_]], tree_coord::octant(x, y, z, bottom_));
   }
 
-  /** Throws std::out_of_range for keys outside [kMinKey, kMaxKey], MemoryLimitError past the pool cap. */
-  void setCell(const Key& key, CellState state) {
+  /**
+   * Writes one cell. Throws std::out_of_range for keys outside [kMinKey, kMaxKey] and MemoryLimitError
+   * past the pool cap. Returns what setValidCell() returns.
+   */
+  unsigned setCell(const Key& key, CellState state) {
     if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::setCell", key);
-    setValidCell(key, state);
+    return setValidCell(key, state);
   }
 
   /** setCell for a key the caller has already checked with isValidKey(). */
-  void setValidCell(const Key& key, CellState state) {
+  unsigned setValidCell(const Key& key, CellState state) {
+    return setValidLeafCells(key, 1u << tree_coord::octant(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y),
+                                                            tree_coord::fromKey(key.z), 1),
+                             state);
+  }
+
+  /**
+   * Writes `state` into the cells `mask` selects (bit i: octant i) of the 2×2×2 leaf that holds `key`, a
+   * valid key: one access for a run of neighbouring cells, as a ray produces them.
+   *
+   * If those cells all held `state` already, returns the level l of a uniform cube around `key` that holds
+   * `state` everywhere (an aligned cube of 2^l cells per axis in tree coordinates; 0 for a lone cell). A
+   * writer sweeping through space, such as a ray, may then skip the rest of that cube: LineBurstAccess at
+   * its limit, the last visited node answering for the next cells. Returns 0 when anything changed, and
+   * always without LineBurstAccess.
+   */
+  unsigned setValidLeafCells(const Key& key, std::uint32_t mask, CellState state) {
     static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
     const std::uint32_t x = tree_coord::fromKey(key.x), y = tree_coord::fromKey(key.y),
                         z = tree_coord::fromKey(key.z);
     if (!locate(x, y, z)) {
-      if (state == CellState::Unknown) return;  // erasing outside the extent changes nothing
+      if (state == CellState::Unknown) return 0;  // erasing outside the extent changes nothing
       tree_->growToCover(x, y, z);
       locate(x, y, z);
     }
-    FastOctTree& t = *tree_;
-    const std::size_t at = path_[bottom_];
-    const NodeWord w = t.words_[at];
-    const unsigned octant = tree_coord::octant(x, y, z, bottom_);
-    const CellState old = node::state(w, octant);
-    if (old == state) return;
+    const NodeWord w = tree_->words_[path_[bottom_]];
     if (bottom_ == 1) {
-      const NodeWord updated = node::withState(w, octant, state);
-      t.words_[at] = updated;
-      if (node::isUniform(updated)) bottom_ = t.collapseFrom(path_, 1);
-    } else {
-      t.expandTo(path_, bottom_, x, y, z);
-      bottom_ = 1;
-      NodeWord& leaf = t.words_[path_[1]];
-      leaf = node::withState(leaf, tree_coord::octant(x, y, z, 1), state);
+      const NodeWord updated = node::withStates(w, mask, state);
+      if (updated == w) return line_burst_ && node::isUniform(w) ? 1 : 0;
+      writeLeaf(updated);
+      return 0;
     }
-    t.recount(old, state);
-    version_ = t.version_;
+    if (node::state(w, tree_coord::octant(x, y, z, bottom_)) == state) return line_burst_ ? bottom_ - 1 : 0;
+    tree_->expandTo(path_, bottom_, x, y, z);
+    bottom_ = 1;
+    writeLeaf(node::withStates(tree_->words_[path_[1]], mask, state));
+    return 0;
   }
 
   void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
@@ -82,6 +95,19 @@ class BasicAccessor {
 
  private:
   static constexpr std::uint64_t kNoPath = ~std::uint64_t(0);
+
+  /** Replaces the leaf word at the end of the path, keeps the counts, and folds it if it became uniform. */
+  void writeLeaf(NodeWord updated) {
+    FastOctTree& t = *tree_;
+    NodeWord& leaf = t.words_[path_[1]];
+    for (CellState s : {CellState::Free, CellState::Occupied}) {
+      t.counts_[std::size_t(s)] += node::popcount(node::octantMask(updated, s));
+      t.counts_[std::size_t(s)] -= node::popcount(node::octantMask(leaf, s));
+    }
+    leaf = updated;
+    if (node::isUniform(updated)) bottom_ = t.collapseFrom(path_, 1);
+    version_ = t.version_;
+  }
 
   /** Finds the bitmap word holding (x, y, z): path_[bottom_]. False outside the root. */
   bool locate(std::uint32_t x, std::uint32_t y, std::uint32_t z) {

@@ -148,11 +148,6 @@ class FastOctTree {
   /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
   unsigned collapseFrom(const std::size_t* path, unsigned level);
 
-  void recount(CellState from, CellState to) {
-    --counts_[std::size_t(from)];
-    ++counts_[std::size_t(to)];
-  }
-
   /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
   template <typename Visitor>
   static void visitCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, Visitor& visit);

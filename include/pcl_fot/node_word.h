@@ -48,6 +48,24 @@ constexpr NodeWord withState(NodeWord w, unsigned octant, CellState s) {
   return (w & ~(3u << shift)) | (NodeWord(s) << shift);
 }
 
+/** Sets the octants `mask` selects (bit i: octant i) to `s`. */
+constexpr NodeWord withStates(NodeWord w, std::uint32_t mask, CellState s) {
+  std::uint32_t pairs = mask & 0xFFu;  // spread bit i to bit 2i
+  pairs = (pairs | (pairs << 4)) & 0x0F0Fu;
+  pairs = (pairs | (pairs << 2)) & 0x3333u;
+  pairs = (pairs | (pairs << 1)) & 0x5555u;
+  const NodeWord field = (pairs * 3u) << kStateShift;
+  return (w & ~field) | ((pairs * NodeWord(s)) << kStateShift);
+}
+
+/** Bits set in an octant mask. Without -mpopcnt the builtin is a libgcc call, so count in registers. */
+constexpr unsigned popcount(std::uint32_t mask) {
+  std::uint32_t x = mask & 0xFFu;
+  x = x - ((x >> 1) & 0x55u);
+  x = (x & 0x33u) + ((x >> 2) & 0x33u);
+  return unsigned((x + (x >> 4)) & 0x0Fu);
+}
+
 /** A bitmap whose 8 octants all hold `s`. */
 constexpr NodeWord uniform(CellState s) {
   return kBitmapTag | ((NodeWord(s) * 0x5555u) << kStateShift);

@@ -23,46 +23,61 @@ class RayWalker {
  public:
   /** Starts in cell `start`, which holds `origin`; `direction` is a unit vector. */
   RayWalker(const VoxelGrid& grid, const Key& start, const float origin[3], const float direction[3])
-      : key_{start.x, start.y, start.z} {
+      : k0_(start.x), k1_(start.y), k2_(start.z) {
     const double res = grid.resolution();
+    const std::int32_t key[3] = {start.x, start.y, start.z};
+    int step[3];
+    double tmax[3], tdelta[3];
     for (int i = 0; i < 3; ++i) {
-      step_[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
-      if (step_[i] != 0) {
-        const double border = (double(key_[i]) + 0.5) * res + double(float(step_[i] * res * 0.5));
-        tmax_[i] = (border - double(origin[i])) / double(direction[i]);
-        tdelta_[i] = res / std::fabs(double(direction[i]));
+      step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
+      if (step[i] != 0) {
+        const double border = (double(key[i]) + 0.5) * res + double(float(step[i] * res * 0.5));
+        tmax[i] = (border - double(origin[i])) / double(direction[i]);
+        tdelta[i] = res / std::fabs(double(direction[i]));
       } else {
-        tmax_[i] = std::numeric_limits<double>::max();
-        tdelta_[i] = std::numeric_limits<double>::max();
+        tmax[i] = std::numeric_limits<double>::max();
+        tdelta[i] = std::numeric_limits<double>::max();
       }
     }
-    next_ = nextAxis();
+    s0_ = step[0], s1_ = step[1], s2_ = step[2];
+    t0_ = tmax[0], t1_ = tmax[1], t2_ = tmax[2];
+    d0_ = tdelta[0], d1_ = tdelta[1], d2_ = tdelta[2];
   }
 
-  Key key() const { return Key{key_[0], key_[1], key_[2]}; }
+  Key key() const { return Key{k0_, k1_, k2_}; }
   /** Distance along the ray at which it leaves the current cell. */
-  double exitDistance() const { return tmax_[next_]; }
+  double exitDistance() const { return std::min(std::min(t0_, t1_), t2_); }
 
-  /** Moves into the next cell. */
+  /**
+   * Moves into the next cell: across x only if x's crossing comes strictly first, ties go to y, then z
+   * (OctoMap's order). Scalar fields and branches, not arrays: the walk stays in registers, and a ray's
+   * regular axis pattern is what branch predictors learn best.
+   */
   void step() {
-    key_[next_] += step_[next_];
-    tmax_[next_] += tdelta_[next_];
-    next_ = nextAxis();
+    if (t0_ < t1_) {
+      if (t0_ < t2_) {
+        k0_ += s0_;
+        t0_ += d0_;
+      } else {
+        k2_ += s2_;
+        t2_ += d2_;
+      }
+    } else if (t1_ < t2_) {
+      k1_ += s1_;
+      t1_ += d1_;
+    } else {
+      k2_ += s2_;
+      t2_ += d2_;
+    }
   }
 
-  bool at(const Key& k) const { return key_[0] == k.x && key_[1] == k.y && key_[2] == k.z; }
+  bool at(const Key& k) const { return k0_ == k.x && k1_ == k.y && k2_ == k.z; }
 
  private:
-  unsigned nextAxis() const {  // OctoMap's order: x only if strictly first, ties go to y, then z
-    const unsigned c = tmax_[0] < tmax_[1] ? 0u : 1u;
-    return tmax_[c] < tmax_[2] ? c : 2u;
-  }
-
-  std::int32_t key_[3];
-  int step_[3];
-  double tmax_[3];
-  double tdelta_[3];
-  unsigned next_;
+  std::int32_t k0_, k1_, k2_;
+  int s0_, s1_, s2_;
+  double t0_, t1_, t2_;
+  double d0_, d1_, d2_;
 };
 
 /** The ray from `from` towards `to` in grid-relative float coordinates: unit direction and length. */
@@ -89,29 +104,51 @@ inline RaySetup setupRay(const VoxelGrid& grid, const float from[3], const float
 }
 
 /**
- * Visits every cell the segment from `origin` to `end` (map frame) passes: the origin's cell first, the
- * end's cell excluded, nothing if both are one cell. These are exactly the cells of OctoMap's
- * computeRayKeys. Returns false, visiting nothing, when an endpoint is not finite or beyond the key range.
+ * Walks the segment from `origin` to `end` (map frame) and hands its cells to `visit_run(const Key* cells,
+ * int n)` in order, in runs of up to 64: the origin's cell first, the end's cell excluded, nothing if both
+ * are one cell. These are exactly the cells of OctoMap's computeRayKeys. Returns how many cells the segment
+ * passes: 0 when both ends share a cell, or an end is not finite or beyond the key range.
  */
-template <typename Visitor>
-bool traceSegment(const VoxelGrid& grid, const float origin[3], const float end[3], Visitor&& visit) {
+template <typename RunVisitor>
+std::size_t traceSegmentRuns(const VoxelGrid& grid, const float origin[3], const float end[3],
+                             RunVisitor&& visit_run) {
   Key from, to;
-  if (!grid.pointToKey(origin[0], origin[1], origin[2], from) || !grid.pointToKey(end[0], end[1], end[2], to))
-    return false;
-  if (from == to) return true;
-  visit(from);
+  if (!grid.pointToKey(origin[0], origin[1], origin[2], from) || !grid.pointToKey(end[0], end[1], end[2], to) ||
+      from == to)
+    return 0;
   const RaySetup ray = setupRay(grid, origin, end);
   RayWalker walker(grid, from, ray.origin, ray.direction);
-  // A DDA never takes more steps than the L1 distance of its end keys; the cap guards against a hang.
-  std::int64_t budget = std::llabs(std::int64_t(to.x) - from.x) + std::llabs(std::int64_t(to.y) - from.y) +
-                        std::llabs(std::int64_t(to.z) - from.z) + 3;
-  while (--budget > 0) {
+  // The walk is monotone per axis, so it can only be at `to` after exactly `span` steps; a few more and
+  // rounding has made it miss `to`, which the length test catches. The cap guards against a hang.
+  const std::int64_t span = std::llabs(std::int64_t(to.x) - from.x) + std::llabs(std::int64_t(to.y) - from.y) +
+                            std::llabs(std::int64_t(to.z) - from.z);
+  // Filling a small buffer and then draining it keeps both loops tight.
+  constexpr int kRun = 64;
+  Key cells[kRun];
+  int n = 0;
+  cells[n++] = from;
+  std::size_t total = 1;
+  for (std::int64_t steps = 1;; ++steps) {
     walker.step();
-    // Stop at the end cell, or where rounding made the walk miss it: past the segment's length.
-    if (walker.at(to) || walker.exitDistance() > double(ray.length)) break;
-    visit(walker.key());
+    if (steps >= span && (walker.at(to) || steps > span + 3)) break;
+    if (walker.exitDistance() > double(ray.length)) break;  // rounding made the walk miss the end cell
+    cells[n++] = walker.key();
+    ++total;
+    if (n == kRun) {
+      visit_run(static_cast<const Key*>(cells), n);
+      n = 0;
+    }
   }
-  return true;
+  if (n > 0) visit_run(static_cast<const Key*>(cells), n);
+  return total;
+}
+
+/** traceSegmentRuns with one call per cell: visit(const Key&). */
+template <typename Visitor>
+std::size_t traceSegment(const VoxelGrid& grid, const float origin[3], const float end[3], Visitor&& visit) {
+  return traceSegmentRuns(grid, origin, end, [&](const Key* cells, int n) {
+    for (int i = 0; i < n; ++i) visit(cells[i]);
+  });
 }
 
 }  // namespace fot

@@ -25,7 +25,7 @@ struct ScanStats {
   std::size_t too_close = 0;       ///< points within min_range, ignored
   std::size_t non_finite = 0;      ///< NaN or Inf points, skipped
   std::size_t out_of_range = 0;    ///< points beyond the key range, skipped
-  std::uint64_t cells_written = 0; ///< cell writes issued: free cells along the rays plus endpoints
+  std::uint64_t ray_cells = 0;     ///< cells the rays pass, each a Free write for the grid; endpoints excluded
 };
 
 /**
