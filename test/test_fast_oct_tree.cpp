@@ -425,3 +425,33 @@ TEST(FastOctTree, MemoryCapRefusesWritesAndKeepsTheTree) {
   EXPECT_GT(refused, 0u);
   EXPECT_LE(tree.poolWords() * sizeof(NodeWord), 4096u);
 }
+
+TEST(FastOctTree, RegionsInABoxAreThoseThatOverlapIt) {
+  FastOctTree tree(0.1);
+  std::mt19937 rng(31);
+  for (int i = 0; i < 30000; ++i)
+    tree.setCell({std::int32_t(rng() % 64) - 32, std::int32_t(rng() % 64) - 32, std::int32_t(rng() % 16)},
+                 (rng() % 3) ? CellState::Occupied : CellState::Free);
+  for (int trial = 0; trial < 50; ++trial) {
+    Key lo{std::int32_t(rng() % 80) - 40, std::int32_t(rng() % 80) - 40, std::int32_t(rng() % 20) - 2};
+    const Key hi{lo.x + std::int32_t(rng() % 20), lo.y + std::int32_t(rng() % 20), lo.z + std::int32_t(rng() % 6)};
+    std::uint64_t expected = 0;
+    for (std::int32_t z = lo.z; z <= hi.z; ++z)
+      for (std::int32_t y = lo.y; y <= hi.y; ++y)
+        for (std::int32_t x = lo.x; x <= hi.x; ++x) expected += tree.getCell({x, y, z}) != CellState::Unknown;
+    std::uint64_t counted = 0;
+    tree.forEachRegionInBox(lo, hi, [&](const Region& r) {
+      const std::int64_t side = std::int64_t(1) << r.level;
+      for (std::int64_t z = std::max<std::int64_t>(r.min_key.z, lo.z); z < std::min<std::int64_t>(r.min_key.z + side, hi.z + 1); ++z)
+        for (std::int64_t y = std::max<std::int64_t>(r.min_key.y, lo.y); y < std::min<std::int64_t>(r.min_key.y + side, hi.y + 1); ++y)
+          counted += std::max<std::int64_t>(0, std::min<std::int64_t>(r.min_key.x + side, hi.x + 1) -
+                                                   std::max<std::int64_t>(r.min_key.x, lo.x));
+    });
+    ASSERT_EQ(counted, expected) << "box " << toString(lo) << " .. " << toString(hi);
+    bool stopped_early = true;
+    int visits = 0;
+    tree.forEachRegionInBox(lo, hi, [&](const Region&) { return ++visits < 1; });
+    stopped_early = visits <= 1;
+    EXPECT_TRUE(stopped_early) << "a visitor returning false stops the walk";
+  }
+}

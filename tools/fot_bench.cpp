@@ -45,12 +45,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::string data_dir = "../shared/data", out = "doc/benchmarks.md";
-  int repeats = 20;
+  int repeats = 20, ray_repeats = 5;
   parse_argument(argc, argv, "-data", data_dir);
   parse_argument(argc, argv, "-out", out);
   parse_argument(argc, argv, "-repeats", repeats);
-  if (repeats < 1) {
-    print_error("-repeats must be at least 1\n");
+  parse_argument(argc, argv, "-ray_repeats", ray_repeats);
+  if (repeats < 1 || ray_repeats < 1) {
+    print_error("-repeats and -ray_repeats must be at least 1\n");
     return 1;
   }
   try {
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
        << "Scans (PCL's data repository): the Kinect frames at 1 cm, the room scans at 5 cm, the terrain "
           "sample at 0.30 m around its own centre, so that each fits the paper's 1024³ grid.\n\n";
     md << fot_bench::benchCellAccess(scans, repeats) << "\n";
+    md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
   } catch (const std::exception& e) {

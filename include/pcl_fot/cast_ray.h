@@ -73,10 +73,10 @@ bool castRay(const MapT& map, const float origin[3], const float direction[3], K
     return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
   };
   auto reader = detail::reader(map);
-  float rel[3], unit[3];
+  double rel[3], unit[3];
   for (int i = 0; i < 3; ++i) {
-    rel[i] = float(double(origin[i]) - grid.origin()[i]);
-    unit[i] = float(direction[i] / norm);
+    rel[i] = double(origin[i]) - grid.origin()[i];
+    unit[i] = direction[i] / norm;
   }
   RayWalker walker(grid, start, rel, unit);
   // Enough steps to reach the map's box from the origin and cross it: the walk always ends.

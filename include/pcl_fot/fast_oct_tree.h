@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include <pcl_fot/key.h>
@@ -83,9 +84,15 @@ class FastOctTree {
   InsertStats insertPoints(const float* xyz, std::size_t count, std::size_t stride_bytes,
                            CellState state = CellState::Occupied, bool line_burst = true);
 
-  /** Visits every maximal non-unknown uniform cube in Morton order: visit(const Region&). */
+  /**
+   * Visits every maximal uniform known cube (a uniform word) in Morton order: visit(const Region&), which
+   * may return false to stop the walk.
+   */
   template <typename Visitor>
   void forEachRegion(Visitor&& visit) const;
+  /** As forEachRegion, but only the regions that overlap the key box [lo, hi] (inclusive), whole. */
+  template <typename Visitor>
+  void forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const;
   /** Visits every cell holding `state` (other than Unknown) in Morton order: visit(const Key&). */
   template <typename Visitor>
   void forEachCell(CellState state, Visitor&& visit) const;
@@ -151,9 +158,10 @@ class FastOctTree {
   /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
   template <typename Visitor>
   static void visitCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, Visitor& visit);
-  template <typename Visitor>
-  void visitRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
-                    Visitor& visit) const;
+  /** Visits the maximal uniform known cubes below word w, skipping subtrees `overlaps` rejects. */
+  template <typename Overlaps, typename Visitor>
+  bool walkRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                   Overlaps& overlaps, Visitor& visit) const;
 
   VoxelGrid grid_;
   std::vector<NodeWord> words_;  // block b is words_[8b .. 8b+7]; words_[0] is the root
@@ -167,36 +175,45 @@ class FastOctTree {
   std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
 };
 
-template <typename Visitor>
-void FastOctTree::forEachRegion(Visitor&& visit) const {
-  const NodeWord root = words_[0];
-  if (node::isUniform(root)) {  // one cube, whatever level the root happens to have grown to
-    if (node::uniformState(root) != CellState::Unknown)
-      visit(Region{Key{tree_coord::toKey(base_[0]), tree_coord::toKey(base_[1]), tree_coord::toKey(base_[2])},
-                   root_level_, node::uniformState(root)});
-    return;
+template <typename Overlaps, typename Visitor>
+bool FastOctTree::walkRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                              Overlaps& overlaps, Visitor& visit) const {
+  const Key corner{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)};
+  if (!overlaps(corner, level)) return true;
+  if (node::isUniform(w)) {
+    if (node::uniformState(w) == CellState::Unknown) return true;
+    const Region region{corner, level, node::uniformState(w)};
+    if constexpr (std::is_same<decltype(visit(region)), bool>::value) {
+      return visit(region);
+    } else {
+      visit(region);
+      return true;
+    }
   }
-  visitRegions(root, root_level_, base_[0], base_[1], base_[2], visit);
+  const std::uint32_t size = 1u << (level - 1);
+  for (unsigned o = 0; o < 8; ++o) {
+    // A bitmap's octant reads as a uniform word one level down.
+    const NodeWord child = node::isBitmap(w) ? node::uniform(node::state(w, o)) : words_[node::childBase(w) + o];
+    if (!walkRegions(child, level - 1, x + (o & 1u) * size, y + ((o >> 1) & 1u) * size,
+                     z + ((o >> 2) & 1u) * size, overlaps, visit))
+      return false;
+  }
+  return true;
 }
 
 template <typename Visitor>
-void FastOctTree::visitRegions(NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
-                               Visitor& visit) const {
-  const unsigned child_level = level - 1;
-  const std::uint32_t size = 1u << child_level;
-  const std::size_t first = node::childBase(w);
-  for (unsigned o = 0; o < 8; ++o) {
-    const std::uint32_t cx = x + (o & 1u) * size, cy = y + ((o >> 1) & 1u) * size,
-                        cz = z + ((o >> 2) & 1u) * size;
-    if (node::isBitmap(w)) {
-      const CellState s = node::state(w, o);
-      if (s != CellState::Unknown)
-        visit(
-            Region{Key{tree_coord::toKey(cx), tree_coord::toKey(cy), tree_coord::toKey(cz)}, child_level, s});
-    } else {
-      visitRegions(words_[first + o], child_level, cx, cy, cz, visit);
-    }
-  }
+void FastOctTree::forEachRegion(Visitor&& visit) const {
+  auto everywhere = [](const Key&, unsigned) { return true; };
+  walkRegions(words_[0], root_level_, base_[0], base_[1], base_[2], everywhere, visit);
+}
+
+template <typename Visitor>
+void FastOctTree::forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const {
+  auto overlaps = [&](const Key& c, unsigned level) {
+    const std::int64_t side = std::int64_t(1) << level;
+    return c.x <= hi.x && c.x + side > lo.x && c.y <= hi.y && c.y + side > lo.y && c.z <= hi.z && c.z + side > lo.z;
+  };
+  walkRegions(words_[0], root_level_, base_[0], base_[1], base_[2], overlaps, visit);
 }
 
 template <typename Visitor>

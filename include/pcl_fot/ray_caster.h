@@ -21,17 +21,22 @@ namespace fot {
  */
 class RayWalker {
  public:
-  /** Starts in cell `start`, which holds `origin`; `direction` is a unit vector. */
-  RayWalker(const VoxelGrid& grid, const Key& start, const float origin[3], const float direction[3])
+  /**
+   * Starts in cell `start`, a cell the ray passes, measuring distances from `origin`; `direction` is a
+   * unit vector. With float coordinates the arithmetic is OctoMap's to the bit (its half cell is a float);
+   * with double coordinates it is as exact as doubles allow, for callers that need no OctoMap parity.
+   */
+  template <typename Scalar>
+  RayWalker(const VoxelGrid& grid, const Key& start, const Scalar origin[3], const Scalar direction[3])
       : k0_(start.x), k1_(start.y), k2_(start.z) {
     const double res = grid.resolution();
     const std::int32_t key[3] = {start.x, start.y, start.z};
     int step[3];
     double tmax[3], tdelta[3];
     for (int i = 0; i < 3; ++i) {
-      step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
+      step[i] = direction[i] > Scalar(0) ? 1 : (direction[i] < Scalar(0) ? -1 : 0);
       if (step[i] != 0) {
-        const double border = (double(key[i]) + 0.5) * res + double(float(step[i] * res * 0.5));
+        const double border = (double(key[i]) + 0.5) * res + double(Scalar(step[i] * res * 0.5));
         tmax[i] = (border - double(origin[i])) / double(direction[i]);
         tdelta[i] = res / std::fabs(double(direction[i]));
       } else {

@@ -16,12 +16,15 @@ void scrubCaches() {
 }
 
 std::string format(const char* fmt, ...) {
-  va_list args;
+  va_list args, again;
   va_start(args, fmt);
-  char buf[512];
-  std::vsnprintf(buf, sizeof(buf), fmt, args);
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, fmt, args);
   va_end(args);
-  return buf;
+  std::string out(std::size_t(n > 0 ? n : 0), '\0');
+  std::vsnprintf(&out[0], out.size() + 1, fmt, again);
+  va_end(again);
+  return out;
 }
 
 std::string Table::markdown() const {
