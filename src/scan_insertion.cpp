@@ -83,8 +83,8 @@ bool traceable(const Key& k) {
 }
 
 template <typename Writer>
-ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], const float* xyz, std::size_t count,
-                 std::size_t stride_bytes, const ScanOptions& options) {
+ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], const float* xyz,
+                 std::size_t count, std::size_t stride_bytes, const ScanOptions& options) {
   if (!std::isfinite(sensor[0]) || !std::isfinite(sensor[1]) || !std::isfinite(sensor[2]))
     throw std::invalid_argument("pcl::fot::insertRays: the sensor position is not finite");
   Key sensor_key;

@@ -434,7 +434,8 @@ TEST(FastOctTree, RegionsInABoxAreThoseThatOverlapIt) {
                  (rng() % 3) ? CellState::Occupied : CellState::Free);
   for (int trial = 0; trial < 50; ++trial) {
     Key lo{std::int32_t(rng() % 80) - 40, std::int32_t(rng() % 80) - 40, std::int32_t(rng() % 20) - 2};
-    const Key hi{lo.x + std::int32_t(rng() % 20), lo.y + std::int32_t(rng() % 20), lo.z + std::int32_t(rng() % 6)};
+    const Key hi{lo.x + std::int32_t(rng() % 20), lo.y + std::int32_t(rng() % 20),
+                 lo.z + std::int32_t(rng() % 6)};
     std::uint64_t expected = 0;
     for (std::int32_t z = lo.z; z <= hi.z; ++z)
       for (std::int32_t y = lo.y; y <= hi.y; ++y)
@@ -442,8 +443,10 @@ TEST(FastOctTree, RegionsInABoxAreThoseThatOverlapIt) {
     std::uint64_t counted = 0;
     tree.forEachRegionInBox(lo, hi, [&](const Region& r) {
       const std::int64_t side = std::int64_t(1) << r.level;
-      for (std::int64_t z = std::max<std::int64_t>(r.min_key.z, lo.z); z < std::min<std::int64_t>(r.min_key.z + side, hi.z + 1); ++z)
-        for (std::int64_t y = std::max<std::int64_t>(r.min_key.y, lo.y); y < std::min<std::int64_t>(r.min_key.y + side, hi.y + 1); ++y)
+      for (std::int64_t z = std::max<std::int64_t>(r.min_key.z, lo.z);
+           z < std::min<std::int64_t>(r.min_key.z + side, hi.z + 1); ++z)
+        for (std::int64_t y = std::max<std::int64_t>(r.min_key.y, lo.y);
+             y < std::min<std::int64_t>(r.min_key.y + side, hi.y + 1); ++y)
           counted += std::max<std::int64_t>(0, std::min<std::int64_t>(r.min_key.x + side, hi.x + 1) -
                                                    std::max<std::int64_t>(r.min_key.x, lo.x));
     });

@@ -81,8 +81,7 @@ void expectSameOccupancyQueries(const Reference& ref, const Ours& ours, const Cl
   std::mt19937 rng(17);
   for (int i = 0; i < 20000; ++i) {
     double p[3];
-    for (int a = 0; a < 3; ++a)
-      p[a] = std::uniform_real_distribution<double>(lo[a] - 1.0, hi[a] + 1.0)(rng);
+    for (int a = 0; a < 3; ++a) p[a] = std::uniform_real_distribution<double>(lo[a] - 1.0, hi[a] + 1.0)(rng);
     ASSERT_EQ(ref.isVoxelOccupiedAtPoint(p[0], p[1], p[2]), ours.isVoxelOccupiedAtPoint(p[0], p[1], p[2]));
   }
 }
@@ -98,8 +97,8 @@ Cloud::Ptr scan(const std::string& name) {
 }  // namespace
 
 TEST(OctreePointCloud, GrowsItsBoxLikePclFromTheFirstPoint) {
-  for (const auto& [name, res] : std::vector<std::pair<std::string, double>>{{"room_scan1.pcd", 0.05},
-                                                                              {"kinect_capture0001.pcd", 0.01}}) {
+  for (const auto& [name, res] : std::vector<std::pair<std::string, double>>{
+           {"room_scan1.pcd", 0.05}, {"kinect_capture0001.pcd", 0.01}}) {
     SCOPED_TRACE(name);
     const Cloud::Ptr cloud = pcl_fot_test::loadScan(name);  // NaN points included: both skip them
     Reference ref(res);

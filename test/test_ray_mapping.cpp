@@ -55,7 +55,8 @@ void expectSameRaysAsOctoMap(const Cloud& cloud, double res, const float origin[
                                          octomap::point3d(p.x, p.y, p.z), ray));
     const float end[3] = {p.x, p.y, p.z};
     const std::vector<Key> ours = ourRay(grid, origin, end);
-    ASSERT_EQ(ours.size(), ray.size()) << "ray " << rays << " to (" << p.x << ", " << p.y << ", " << p.z << ")";
+    ASSERT_EQ(ours.size(), ray.size())
+        << "ray " << rays << " to (" << p.x << ", " << p.y << ", " << p.z << ")";
     std::size_t i = 0;
     for (const auto& k : ray) ASSERT_EQ(ours[i++], fromOctoMap(k)) << "ray " << rays << " cell " << i - 1;
     ++rays;
@@ -169,8 +170,8 @@ TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
   cloud->sensor_orientation_ = Eigen::Quaternionf(Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ()));
   FastOctTree from_cloud(0.1), from_affine(0.1), from_matrix(0.1);
   insertScan(from_cloud, *cloud);
-  const Eigen::Affine3f pose = Eigen::Translation3f(1.3f, -0.4f, 0.2f) *
-                               Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
+  const Eigen::Affine3f pose =
+      Eigen::Translation3f(1.3f, -0.4f, 0.2f) * Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
   insertScan(from_affine, *cloud, pose);
   insertScan(from_matrix, *cloud, Eigen::Matrix4f(pose.matrix()));
   EXPECT_TRUE(from_cloud == from_affine);
@@ -182,11 +183,11 @@ TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
 TEST(ScanInsertion, RangesNanAndPrecedence) {
   Cloud cloud;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  cloud.push_back(pcl::PointXYZ(5.05f, 0.05f, 0.05f));    // endpoint in cell (50, 0, 0) at 0.1 m
-  cloud.push_back(pcl::PointXYZ(2.05f, 0.05f, 0.05f));    // endpoint on the first ray's path: occupied wins
+  cloud.push_back(pcl::PointXYZ(5.05f, 0.05f, 0.05f));  // endpoint in cell (50, 0, 0) at 0.1 m
+  cloud.push_back(pcl::PointXYZ(2.05f, 0.05f, 0.05f));  // endpoint on the first ray's path: occupied wins
   cloud.push_back(pcl::PointXYZ(nan, 1.0f, 1.0f));
-  cloud.push_back(pcl::PointXYZ(0.0f, 30.05f, 0.05f));    // beyond max range: free up to 10 m only
-  cloud.push_back(pcl::PointXYZ(0.02f, 0.01f, 0.0f));     // within min range: ignored
+  cloud.push_back(pcl::PointXYZ(0.0f, 30.05f, 0.05f));  // beyond max range: free up to 10 m only
+  cloud.push_back(pcl::PointXYZ(0.02f, 0.01f, 0.0f));   // within min range: ignored
   FastOctTree tree(0.1);
   ScanOptions options;
   options.max_range = 10.0;
@@ -201,7 +202,8 @@ TEST(ScanInsertion, RangesNanAndPrecedence) {
   EXPECT_EQ(tree.getCell({20, 0, 0}), CellState::Occupied) << "occupied wins over free within a scan";
   EXPECT_EQ(tree.getCell({49, 0, 0}), CellState::Free);
   EXPECT_EQ(tree.getCell({0, 98, 0}), CellState::Free);
-  EXPECT_EQ(tree.getCell({0, 99, 0}), CellState::Unknown) << "the truncated ray ends at 10 m, end cell excluded";
+  EXPECT_EQ(tree.getCell({0, 99, 0}), CellState::Unknown)
+      << "the truncated ray ends at 10 m, end cell excluded";
   EXPECT_EQ(tree.getCell({0, 300, 0}), CellState::Unknown) << "and marks no endpoint";
   EXPECT_EQ(tree.getOccupiedCount(), 2u);
 

@@ -2,7 +2,6 @@
 #include <string>
 #include <vector>
 
-#include <pcl/common/transforms.h>
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
@@ -10,7 +9,7 @@
 
 #include <pcl_fot/fast_oct_tree.h>
 #include <pcl_fot/io/voxel_export.h>
-#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/occupancy_mapping.h>
 
 #include "synthetic_scene.h"
 
@@ -21,9 +20,10 @@ namespace {
 
 void printHelp(const char* prog) {
   print_info(
-      "Builds a FastOctTree occupancy map from range scans and writes its occupied voxel centres as a PCD\n"
-      "file for pcl_viewer. Each scan is placed by its VIEWPOINT (sensor pose). Without scans, it maps the\n"
-      "embedded default: a synthetic furnished room seen by a depth camera from six poses.\n\n"
+      "Builds a FastOctTree occupancy map from range scans with ray tracing (free space along every ray,\n"
+      "occupied endpoints) and writes its occupied voxel centres as a PCD file for pcl_viewer. Each scan is\n"
+      "placed by its VIEWPOINT (sensor pose). Without scans, it maps the embedded default: a synthetic\n"
+      "furnished room seen by a depth camera from six poses.\n\n"
       "Syntax: %s [options] [scan1.pcd scan2.pcd ...]\n\n"
       "  -res <m>        voxel edge length in metres (default: 0.05)\n"
       "  -out <prefix>   output prefix (default: fot_map); writes <prefix>_occupied.pcd\n"
@@ -62,27 +62,25 @@ int main(int argc, char** argv) {
     }
 
     pcl::fot::FastOctTree tree(res);
-    pcl::fot::InsertStats total;
+    pcl::fot::ScanStats total;
     for (const auto& scan : scans) {
-      const Eigen::Affine3f pose =
-          Eigen::Translation3f(scan->sensor_origin_.head<3>()) * scan->sensor_orientation_;
-      Cloud in_map;
-      pcl::transformPointCloud(*scan, in_map, pose);
-      const auto st = pcl::fot::insertPointCloud(tree, in_map);
-      total.inserted += st.inserted;
+      const pcl::fot::ScanStats st = pcl::fot::insertScan(tree, *scan);
+      total.rays += st.rays;
       total.non_finite += st.non_finite;
       total.out_of_range += st.out_of_range;
+      total.ray_cells += st.ray_cells;
     }
     const std::string occupied_file = out + "_occupied.pcd";
     const std::size_t written = pcl::fot::io::saveVoxelCentersPCD(tree, occupied_file);
 
     print_info("Map summary\n");
     print_info("  scans              %zu\n", scans.size());
-    print_info("  points inserted    %zu (skipped: %zu NaN/Inf, %zu out of range)\n", total.inserted,
-               total.non_finite, total.out_of_range);
+    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n",
+               total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
     print_info("  resolution         %g m\n", tree.getResolution());
     print_info("  depth              %u levels\n", tree.getDepth());
     print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
+    print_info("  free cells         %llu\n", (unsigned long long)tree.getFreeCount());
     print_info("  node words         %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
     print_info("  memory             %zu bytes\n", tree.getMemoryBytes());
     print_info("Wrote %zu voxel centres to %s (open it with: pcl_viewer %s)\n", written,

@@ -50,8 +50,9 @@ class BasicAccessor {
 
   /** setCell for a key the caller has already checked with isValidKey(). */
   unsigned setValidCell(const Key& key, CellState state) {
-    return setValidLeafCells(key, 1u << tree_coord::octant(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y),
-                                                            tree_coord::fromKey(key.z), 1),
+    return setValidLeafCells(key,
+                             1u << tree_coord::octant(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y),
+                                                      tree_coord::fromKey(key.z), 1),
                              state);
   }
 

@@ -39,8 +39,12 @@ struct GridReader {
   CellState get(const Key& k) { return grid.getCell(k); }
   const FastOccMesh& grid;
 };
-inline TreeReader reader(const FastOctTree& t) { return TreeReader(t); }
-inline GridReader reader(const FastOccMesh& g) { return GridReader(g); }
+inline TreeReader reader(const FastOctTree& t) {
+  return TreeReader(t);
+}
+inline GridReader reader(const FastOccMesh& g) {
+  return GridReader(g);
+}
 
 }  // namespace detail
 
@@ -54,8 +58,8 @@ inline GridReader reader(const FastOccMesh& g) { return GridReader(g); }
  * left the extent of the map. Throws std::invalid_argument for a non-finite origin or a zero direction.
  */
 template <typename MapT>
-bool castRay(const MapT& map, const float origin[3], const float direction[3], Key& hit, double max_range = -1.0,
-             bool ignore_unknown = false) {
+bool castRay(const MapT& map, const float origin[3], const float direction[3], Key& hit,
+             double max_range = -1.0, bool ignore_unknown = false) {
   const VoxelGrid& grid = map.getGrid();
   const double norm = std::sqrt(double(direction[0]) * direction[0] + double(direction[1]) * direction[1] +
                                 double(direction[2]) * direction[2]);
@@ -81,8 +85,9 @@ bool castRay(const MapT& map, const float origin[3], const float direction[3], K
   RayWalker walker(grid, start, rel, unit);
   // Enough steps to reach the map's box from the origin and cross it: the walk always ends.
   const std::int64_t span = std::int64_t(hi.x) - lo.x + std::int64_t(hi.y) - lo.y + std::int64_t(hi.z) - lo.z;
-  std::int64_t budget = span + std::llabs(std::int64_t(start.x) - lo.x) + std::llabs(std::int64_t(start.y) - lo.y) +
-                        std::llabs(std::int64_t(start.z) - lo.z) + 3;
+  std::int64_t budget = span + std::llabs(std::int64_t(start.x) - lo.x) +
+                        std::llabs(std::int64_t(start.y) - lo.y) + std::llabs(std::int64_t(start.z) - lo.z) +
+                        3;
   double entry = 0.0;  // distance at which the ray enters the current cell
   bool was_inside = inside(start);
   for (;;) {

@@ -193,7 +193,8 @@ bool FastOctTree::walkRegions(NodeWord w, unsigned level, std::uint32_t x, std::
   const std::uint32_t size = 1u << (level - 1);
   for (unsigned o = 0; o < 8; ++o) {
     // A bitmap's octant reads as a uniform word one level down.
-    const NodeWord child = node::isBitmap(w) ? node::uniform(node::state(w, o)) : words_[node::childBase(w) + o];
+    const NodeWord child =
+        node::isBitmap(w) ? node::uniform(node::state(w, o)) : words_[node::childBase(w) + o];
     if (!walkRegions(child, level - 1, x + (o & 1u) * size, y + ((o >> 1) & 1u) * size,
                      z + ((o >> 2) & 1u) * size, overlaps, visit))
       return false;
@@ -211,7 +212,8 @@ template <typename Visitor>
 void FastOctTree::forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const {
   auto overlaps = [&](const Key& c, unsigned level) {
     const std::int64_t side = std::int64_t(1) << level;
-    return c.x <= hi.x && c.x + side > lo.x && c.y <= hi.y && c.y + side > lo.y && c.z <= hi.z && c.z + side > lo.z;
+    return c.x <= hi.x && c.x + side > lo.x && c.y <= hi.y && c.y + side > lo.y && c.z <= hi.z &&
+           c.z + side > lo.z;
   };
   walkRegions(words_[0], root_level_, base_[0], base_[1], base_[2], overlaps, visit);
 }

@@ -2,8 +2,8 @@
 
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <pcl/point_cloud.h>
+#include <Eigen/Geometry>
 
 #include <pcl_fot/scan_insertion.h>
 

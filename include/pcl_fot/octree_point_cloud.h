@@ -5,13 +5,13 @@
 #include <memory>
 #include <vector>
 
-#include <Eigen/Core>
 #include <pcl/memory.h>
 #include <pcl/octree/octree_key.h>
 #include <pcl/pcl_macros.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/types.h>
+#include <Eigen/Core>
 
 #include <pcl_fot/fast_oct_tree.h>
 
@@ -77,7 +77,8 @@ class OctreePointCloud {
   /** Throws std::invalid_argument for a resolution that is not positive and finite (PCL asserts). */
   OctreePointCloud(const double resolution_arg);
 
-  void setInputCloud(const PointCloudConstPtr& cloud_arg, const IndicesConstPtr& indices_arg = IndicesConstPtr());
+  void setInputCloud(const PointCloudConstPtr& cloud_arg,
+                     const IndicesConstPtr& indices_arg = IndicesConstPtr());
   PointCloudConstPtr getInputCloud() const { return input_; }
   IndicesConstPtr const getIndices() const { return indices_; }
   void setEpsilon(double eps) { epsilon_ = eps; }
@@ -98,7 +99,8 @@ class OctreePointCloud {
 
   /** False outside the bounding box. */
   bool isVoxelOccupiedAtPoint(const PointT& point_arg) const;
-  bool isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg, const double point_z_arg) const;
+  bool isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg,
+                              const double point_z_arg) const;
   bool isVoxelOccupiedAtPoint(const index_t& point_idx_arg) const;
   /** No-op outside the bounding box. */
   void deleteVoxelAtPoint(const PointT& point_arg);
@@ -111,10 +113,13 @@ class OctreePointCloud {
    * near to far, as OctreePointCloudSearch::getIntersectedVoxelCenters; at most max_voxel_count if not 0.
    */
   uindex_t getIntersectedVoxelCenters(Eigen::Vector3f origin, Eigen::Vector3f direction,
-                                      AlignedPointTVector& voxel_center_list, uindex_t max_voxel_count = 0) const;
+                                      AlignedPointTVector& voxel_center_list,
+                                      uindex_t max_voxel_count = 0) const;
   /** PCL's approximation: samples the segment every res*precision, appends each new voxel's centre. */
-  uindex_t getApproxIntersectedVoxelCentersBySegment(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
-                                                     AlignedPointTVector& voxel_center_list, float precision = 0.2);
+  uindex_t getApproxIntersectedVoxelCentersBySegment(const Eigen::Vector3f& origin,
+                                                     const Eigen::Vector3f& end,
+                                                     AlignedPointTVector& voxel_center_list,
+                                                     float precision = 0.2);
 
   void defineBoundingBox();
   void defineBoundingBox(const double min_x_arg, const double min_y_arg, const double min_z_arg,
@@ -124,7 +129,9 @@ class OctreePointCloud {
   void getBoundingBox(double& min_x_arg, double& min_y_arg, double& min_z_arg, double& max_x_arg,
                       double& max_y_arg, double& max_z_arg) const;
 
-  double getVoxelSquaredDiameter(uindex_t tree_depth_arg) const { return 3.0 * getVoxelSquaredSideLen(tree_depth_arg); }
+  double getVoxelSquaredDiameter(uindex_t tree_depth_arg) const {
+    return 3.0 * getVoxelSquaredSideLen(tree_depth_arg);
+  }
   double getVoxelSquaredDiameter() const { return getVoxelSquaredDiameter(depth_); }
   double getVoxelSquaredSideLen(uindex_t tree_depth_arg) const;
   double getVoxelSquaredSideLen() const { return getVoxelSquaredSideLen(depth_); }
@@ -142,7 +149,8 @@ class OctreePointCloud {
   /** The FastOctTree holding the voxels (keys shifted from pcl::octree's; see pclKeyToTreeKey). */
   const FastOctTree& getFastOctTree() const { return tree_; }
   Key pclKeyToTreeKey(const octree::OctreeKey& k) const {
-    return Key{std::int32_t(k.x) + offset_[0], std::int32_t(k.y) + offset_[1], std::int32_t(k.z) + offset_[2]};
+    return Key{std::int32_t(k.x) + offset_[0], std::int32_t(k.y) + offset_[1],
+               std::int32_t(k.z) + offset_[2]};
   }
 
   PCL_MAKE_ALIGNED_OPERATOR_NEW

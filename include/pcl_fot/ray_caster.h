@@ -118,15 +118,15 @@ template <typename RunVisitor>
 std::size_t traceSegmentRuns(const VoxelGrid& grid, const float origin[3], const float end[3],
                              RunVisitor&& visit_run) {
   Key from, to;
-  if (!grid.pointToKey(origin[0], origin[1], origin[2], from) || !grid.pointToKey(end[0], end[1], end[2], to) ||
-      from == to)
+  if (!grid.pointToKey(origin[0], origin[1], origin[2], from) ||
+      !grid.pointToKey(end[0], end[1], end[2], to) || from == to)
     return 0;
   const RaySetup ray = setupRay(grid, origin, end);
   RayWalker walker(grid, from, ray.origin, ray.direction);
   // The walk is monotone per axis, so it can only be at `to` after exactly `span` steps; a few more and
   // rounding has made it miss `to`, which the length test catches. The cap guards against a hang.
-  const std::int64_t span = std::llabs(std::int64_t(to.x) - from.x) + std::llabs(std::int64_t(to.y) - from.y) +
-                            std::llabs(std::int64_t(to.z) - from.z);
+  const std::int64_t span = std::llabs(std::int64_t(to.x) - from.x) +
+                            std::llabs(std::int64_t(to.y) - from.y) + std::llabs(std::int64_t(to.z) - from.z);
   // Filling a small buffer and then draining it keeps both loops tight.
   constexpr int kRun = 64;
   Key cells[kRun];

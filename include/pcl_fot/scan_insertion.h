@@ -19,13 +19,13 @@ struct ScanOptions {
 };
 
 struct ScanStats {
-  std::size_t rays = 0;            ///< points traced, truncated ones included
-  std::size_t occupied = 0;        ///< endpoints marked occupied
-  std::size_t truncated = 0;       ///< rays cut at max_range: free space only
-  std::size_t too_close = 0;       ///< points within min_range, ignored
-  std::size_t non_finite = 0;      ///< NaN or Inf points, skipped
-  std::size_t out_of_range = 0;    ///< points beyond the key range, skipped
-  std::uint64_t ray_cells = 0;     ///< cells the rays pass, each a Free write for the grid; endpoints excluded
+  std::size_t rays = 0;          ///< points traced, truncated ones included
+  std::size_t occupied = 0;      ///< endpoints marked occupied
+  std::size_t truncated = 0;     ///< rays cut at max_range: free space only
+  std::size_t too_close = 0;     ///< points within min_range, ignored
+  std::size_t non_finite = 0;    ///< NaN or Inf points, skipped
+  std::size_t out_of_range = 0;  ///< points beyond the key range, skipped
+  std::uint64_t ray_cells = 0;   ///< cells the rays pass, each a Free write for the grid; endpoints excluded
 };
 
 /**

@@ -22,8 +22,8 @@ using pcl::fot::ScanOptions;
 using pcl::fot::ScanStats;
 
 std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
-  Table speed({"scan", "res", "rays", "cells written", "FOT ms", "FOT no LB ms", "grid ms", "OctoMap ms", "FT/GR",
-               "LB gain", "OctoMap / FOT"});
+  Table speed({"scan", "res", "rays", "cells written", "FOT ms", "FOT no LB ms", "grid ms", "OctoMap ms",
+               "FT/GR", "LB gain", "OctoMap / FOT"});
   Table sizes({"scan", "raw points: FOT KB", "ray-traced: FOT KB", "ray-traced: OctoMap KB", "OctoMap / FOT",
                "free cells", "occupied cells"});
   std::vector<double> ft_gr, lb_gain, om_ratio;
@@ -39,7 +39,8 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
     const float sensor[3] = {pose.translation().x(), pose.translation().y(), pose.translation().z()};
     octomap::Pointcloud octomap_scan;
     for (const auto& p : in_map)
-      if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) octomap_scan.push_back(p.x, p.y, p.z);
+      if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+        octomap_scan.push_back(p.x, p.y, p.z);
     const float* xyz = &in_map[0].x;
 
     FastOccMesh grid{pcl::fot::VoxelGrid(res)};
@@ -54,14 +55,20 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
       FastOctTree fot(res), fot_plain(res);
       octomap::OcTree octomap_tree(res);
       scrubCaches();
-      t_fot.push_back(timeOnce([&] { stats = pcl::fot::insertRays(fot, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ)); }));
+      t_fot.push_back(timeOnce(
+          [&] { stats = pcl::fot::insertRays(fot, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ)); }));
       scrubCaches();
-      t_plain.push_back(timeOnce([&] { pcl::fot::insertRays(fot_plain, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ), plain); }));
+      t_plain.push_back(timeOnce([&] {
+        pcl::fot::insertRays(fot_plain, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ), plain);
+      }));
       grid.clear();
       scrubCaches();
-      t_grid.push_back(timeOnce([&] { pcl::fot::insertRays(grid, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ)); }));
+      t_grid.push_back(
+          timeOnce([&] { pcl::fot::insertRays(grid, sensor, xyz, in_map.size(), sizeof(pcl::PointXYZ)); }));
       scrubCaches();
-      t_om.push_back(timeOnce([&] { octomap_tree.insertPointCloud(octomap_scan, octomap::point3d(sensor[0], sensor[1], sensor[2])); }));
+      t_om.push_back(timeOnce([&] {
+        octomap_tree.insertPointCloud(octomap_scan, octomap::point3d(sensor[0], sensor[1], sensor[2]));
+      }));
       same = same && fot == fot_plain && fot.getFreeCount() == grid.getFreeCount() &&
              fot.getOccupiedCount() == grid.getOccupiedCount();
       fot_bytes = fot.getMemoryBytes();
@@ -81,8 +88,9 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
     om_ratio.push_back(om / fot);
     speed.add({scan.name, format("%.2f m", res), format("%zu", stats.rays),
                format("%.2fM", double(stats.ray_cells + stats.occupied) / 1e6), format("%.1f", fot),
-               format("%.1f", fot_plain), format("%.1f", gr), format("%.1f", om), format("**%.2f**", fot / gr),
-               format("**%.2f×**", fot_plain / fot), format("**%.1f×**", om / fot)});
+               format("%.1f", fot_plain), format("%.1f", gr), format("%.1f", om),
+               format("**%.2f**", fot / gr), format("**%.2f×**", fot_plain / fot),
+               format("**%.1f×**", om / fot)});
     sizes.add({scan.name, format("%.0f", raw.getMemoryBytes() / 1024.0), format("%.0f", fot_bytes / 1024.0),
                format("%.0f", om_bytes / 1024.0), format("%.1f×", double(om_bytes) / double(fot_bytes)),
                format("%zu", free_cells), format("%zu", occupied_cells)});
@@ -99,11 +107,13 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
       "tests). Cells written counts every cell on every ray plus the endpoints, as the paper's #w.\n\n",
       repeats);
   out += speed.markdown();
-  out += format("\nMedians over the scans: FT/GR **%.2f** (paper: about 2.5), LineBurstAccess gain **%.2f×**, "
-                "OctoMap / FOT **%.1f×**.\n\n",
-                median(ft_gr), median(lb_gain), median(om_ratio));
-  out += "Map sizes (Table IV): FOT bytes are `getMemoryBytes()`, OctoMap's its `memoryUsage()`, for the same "
-         "ray-traced map. The dense grid is 262,144 KB with free cells (131,072 KB without).\n\n";
+  out += format(
+      "\nMedians over the scans: FT/GR **%.2f** (paper: about 2.5), LineBurstAccess gain **%.2f×**, "
+      "OctoMap / FOT **%.1f×**.\n\n",
+      median(ft_gr), median(lb_gain), median(om_ratio));
+  out +=
+      "Map sizes (Table IV): FOT bytes are `getMemoryBytes()`, OctoMap's its `memoryUsage()`, for the same "
+      "ray-traced map. The dense grid is 262,144 KB with free cells (131,072 KB without).\n\n";
   out += sizes.markdown();
   return out;
 }

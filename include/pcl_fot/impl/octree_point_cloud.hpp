@@ -47,7 +47,8 @@ OctreePointCloud<PointT>::OctreePointCloud(const double resolution_arg)
 }
 
 template <typename PointT>
-void OctreePointCloud<PointT>::setInputCloud(const PointCloudConstPtr& cloud_arg, const IndicesConstPtr& indices_arg) {
+void OctreePointCloud<PointT>::setInputCloud(const PointCloudConstPtr& cloud_arg,
+                                             const IndicesConstPtr& indices_arg) {
   input_ = cloud_arg;
   indices_ = indices_arg;
 }
@@ -55,7 +56,8 @@ void OctreePointCloud<PointT>::setInputCloud(const PointCloudConstPtr& cloud_arg
 template <typename PointT>
 void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
   if (getLeafCount() != 0) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
     return;
   }
   if (!(resolution_arg > 0.0) || !std::isfinite(resolution_arg)) {
@@ -87,7 +89,8 @@ void OctreePointCloud<PointT>::getKeyBitSize() {
   const float min_value = std::numeric_limits<float>::epsilon();
   uindex_t max_voxels = 2;
   for (int a = 0; a < 3; ++a)
-    max_voxels = std::max(max_voxels, static_cast<uindex_t>(std::ceil((max_[a] - min_[a] - min_value) / resolution_)));
+    max_voxels =
+        std::max(max_voxels, static_cast<uindex_t>(std::ceil((max_[a] - min_[a] - min_value) / resolution_)));
   depth_ = std::max<uindex_t>(
       std::min<uindex_t>(octree::OctreeKey::maxDepth, std::ceil(std::log2(max_voxels) - min_value)), 0);
   const double side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_;
@@ -129,9 +132,10 @@ bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, doubl
       continue;
     }
     if (depth_ >= detail::kMaxPclDepth) {
-      PCL_ERROR("[pcl::fot::OctreePointCloud] The point (%g, %g, %g) would grow the octree beyond 2^%u cells per "
-                "axis; it is not added.\n",
-                x, y, z, detail::kMaxPclDepth);
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud] The point (%g, %g, %g) would grow the octree beyond 2^%u cells per "
+          "axis; it is not added.\n",
+          x, y, z, detail::kMaxPclDepth);
       return false;
     }
     // A new root: the box doubles, downwards on every axis the point does not exceed upwards.
@@ -152,7 +156,8 @@ bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, doubl
 template <typename PointT>
 void OctreePointCloud<PointT>::setOccupiedVoxelAtPoint(const PointT& point_arg) {
   if (!isFinite(point_arg)) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::setOccupiedVoxelAtPoint] The point is not finite; it is not added.\n");
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::setOccupiedVoxelAtPoint] The point is not finite; it is not added.\n");
     return;
   }
   if (!adoptBoundingBoxToPoint(point_arg.x, point_arg.y, point_arg.z)) return;
@@ -174,7 +179,8 @@ void OctreePointCloud<PointT>::addPointsFromInputCloud() {
   if (indices_) {
     for (const auto index : *indices_) {
       if (index < 0 || static_cast<std::size_t>(index) >= input_->size()) {
-        PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] Index %d is outside the cloud.\n", index);
+        PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] Index %d is outside the cloud.\n",
+                  index);
         continue;
       }
       if (isFinite((*input_)[index])) setOccupiedVoxelAtPoint((*input_)[index]);
@@ -240,14 +246,15 @@ void OctreePointCloud<PointT>::deleteVoxelAtPoint(const PointT& point_arg) {
   tree_.eraseCell(pclKeyToTreeKey(key));
   // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
   // so the smallest goes first, and each larger one only once nothing is left inside it.
-  std::sort(phantoms_.begin(), phantoms_.end(), [](const Phantom& a, const Phantom& b) { return a.level < b.level; });
+  std::sort(phantoms_.begin(), phantoms_.end(),
+            [](const Phantom& a, const Phantom& b) { return a.level < b.level; });
   const Key target = pclKeyToTreeKey(key);
   while (!phantoms_.empty()) {
     const Phantom& ph = phantoms_.front();
     const std::int32_t last = std::int32_t((std::int64_t(1) << ph.level) - 1);
     const Key hi{ph.min.x + last, ph.min.y + last, ph.min.z + last};
-    const bool on_path = target.x >= ph.min.x && target.x <= hi.x && target.y >= ph.min.y && target.y <= hi.y &&
-                         target.z >= ph.min.z && target.z <= hi.z;
+    const bool on_path = target.x >= ph.min.x && target.x <= hi.x && target.y >= ph.min.y &&
+                         target.y <= hi.y && target.z >= ph.min.z && target.z <= hi.z;
     bool holds_voxels = false;
     if (on_path)
       tree_.forEachRegionInBox(ph.min, hi, [&](const Region& r) {
@@ -262,7 +269,8 @@ void OctreePointCloud<PointT>::deleteVoxelAtPoint(const PointT& point_arg) {
 template <typename PointT>
 void OctreePointCloud<PointT>::deleteVoxelAtPoint(const index_t& point_idx_arg) {
   if (!input_ || point_idx_arg < 0 || static_cast<std::size_t>(point_idx_arg) >= input_->size()) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::deleteVoxelAtPoint] Index %d is not in the input cloud.\n", point_idx_arg);
+    PCL_ERROR("[pcl::fot::OctreePointCloud::deleteVoxelAtPoint] Index %d is not in the input cloud.\n",
+              point_idx_arg);
     return;
   }
   deleteVoxelAtPoint((*input_)[point_idx_arg]);
@@ -296,7 +304,8 @@ std::size_t OctreePointCloud<PointT>::getBranchCount() const {
   std::size_t count = 1;  // the root
   // In depth-first order the voxels under one branch are contiguous: count the runs per level.
   for (uindex_t level = 1; level < depth_; ++level)
-    for (std::size_t i = 0; i < keys.size(); ++i) count += i == 0 || !detail::samePrefix(keys[i - 1], keys[i], level);
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      count += i == 0 || !detail::samePrefix(keys[i - 1], keys[i], level);
   // Empty old roots and their ancestors, unless a voxel already accounts for them.
   std::set<std::tuple<uindex_t, uindex_t, uindex_t, uindex_t>> extra;
   for (const Phantom& ph : phantoms_) {
@@ -337,7 +346,8 @@ void OctreePointCloud<PointT>::defineBoundingBox(const double min_x_arg, const d
                                                  const double min_z_arg, const double max_x_arg,
                                                  const double max_y_arg, const double max_z_arg) {
   if (getLeafCount() != 0) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] The octree must be empty to define its box.\n");
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The octree must be empty to define its box.\n");
     return;
   }
   const double in[6] = {min_x_arg, min_y_arg, min_z_arg, max_x_arg, max_y_arg, max_z_arg};
@@ -356,8 +366,9 @@ void OctreePointCloud<PointT>::defineBoundingBox(const double min_x_arg, const d
   max_[2] = std::max(min_z_arg, max_z_arg);
   getKeyBitSize();
   if (depth_ > detail::kMaxPclDepth) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] The box spans more than 2^%u cells per axis.\n",
-              detail::kMaxPclDepth);
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The box spans more than 2^%u cells per axis.\n",
+        detail::kMaxPclDepth);
     std::copy(saved_min, saved_min + 3, min_);
     std::copy(saved_max, saved_max + 3, max_);
     depth_ = saved_depth;
@@ -420,10 +431,9 @@ typename OctreePointCloud<PointT>::LeafIterator OctreePointCloud<PointT>::leaf_d
 }
 
 template <typename PointT>
-uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(const Eigen::Vector3f& origin,
-                                                                             const Eigen::Vector3f& end,
-                                                                             AlignedPointTVector& voxel_center_list,
-                                                                             float precision) {
+uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
+    const Eigen::Vector3f& origin, const Eigen::Vector3f& end, AlignedPointTVector& voxel_center_list,
+    float precision) {
   // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
   Eigen::Vector3f direction = end - origin;
   const float norm = direction.norm();
@@ -448,7 +458,8 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(con
 }
 
 template <typename PointT>
-uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f origin, Eigen::Vector3f direction,
+uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f origin,
+                                                              Eigen::Vector3f direction,
                                                               AlignedPointTVector& voxel_center_list,
                                                               uindex_t max_voxel_count) const {
   voxel_center_list.clear();
