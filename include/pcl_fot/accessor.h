@@ -91,6 +91,17 @@ class BasicAccessor {
 
   void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
 
+  /**
+   * Locates the bitmap word whose octant holds `key` and returns its level, or 0 when the key lies outside
+   * the root. Afterwards pathOffset(l) is the pool offset of the level-l word on the way down, for every
+   * level from the returned one up to the root. Search algorithms walk back up this path.
+   */
+  unsigned locatePath(const Key& key) {
+    return locate(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y), tree_coord::fromKey(key.z)) ? bottom_
+                                                                                                        : 0u;
+  }
+  std::size_t pathOffset(unsigned level) const { return path_[level]; }
+
   /** Forgets the cached path; the next access starts at the root. */
   void reset() { version_ = kNoPath; }
 

@@ -1,0 +1,239 @@
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <pcl_fot/accessor.h>
+#include <pcl_fot/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+/** Manhattan (L1) distances, or Euclidean ones, which are reported squared as in PCL. */
+enum class Metric { Manhattan, Euclidean };
+
+namespace detail {
+
+/**
+ * The nearest-tree-neighbour walk of the paper (§IV, Algorithm IV.1), shared by the cell and the point
+ * searches. The downward phase is the accessor's: it finds the deepest node holding the query, reusing
+ * the previous query's path. The upward phase then searches, level by level, the siblings of the node
+ * already searched, nearest box first, pruning every box that cannot beat the current result, and stops
+ * as soon as nothing outside the searched node can. Collapsed regions are searched as cubes, never
+ * expanded in the tree.
+ *
+ * The Policy knows the query and the metric and keeps the result:
+ *   using Distance;
+ *   Distance lowerBound(const std::uint32_t lo[3], unsigned level) const;  // nothing in the cube is nearer
+ *   Distance exterior(const std::uint32_t lo[3], unsigned level) const;    // the query's cube: nothing outside is nearer
+ *   bool worthVisiting(Distance lower_bound) const;
+ *   bool settled(Distance exterior) const;
+ *   bool wholeRegions() const;  // visit uniform cubes whole rather than cell by cell
+ *   void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t rank);
+ *   void visitCell(const std::uint32_t cell[3], std::uint64_t rank);
+ * Cubes are given in tree coordinates. `rank` numbers target cells in the tree's Morton order when the walk
+ * is given `ranks` (the rank of the first target cell under each bitmap word, by pool offset), else 0.
+ */
+template <typename Policy>
+class NeighbourWalk {
+ public:
+  using Distance = typename Policy::Distance;
+
+  NeighbourWalk(const FastOctTree& tree, CellState target, const std::uint64_t* ranks, Policy& policy)
+      : tree_(tree), words_(tree.words()), target_(target), ranks_(ranks), policy_(policy) {}
+
+  /** Searches around the cell `query`, which may lie anywhere, inside the tree or not. */
+  void run(ConstAccessor& accessor, const Key& query) {
+    words_ = tree_.words();
+    const unsigned bottom = accessor.locatePath(query);
+    if (bottom == 0) {  // outside the root: the root is the node to search
+      searchWord(tree_.rootWord(), 0, tree_.rootLevel(), tree_.rootBase().data());
+      return;
+    }
+    const std::uint32_t q[3] = {tree_coord::fromKey(query.x), tree_coord::fromKey(query.y),
+                                tree_coord::fromKey(query.z)};
+    std::uint32_t base[3];
+    corner(q, bottom, base);
+    searchWord(words_[accessor.pathOffset(bottom)], accessor.pathOffset(bottom), bottom, base);
+    for (unsigned level = bottom + 1; level <= tree_.rootLevel(); ++level) {
+      if (policy_.settled(policy_.exterior(base, level - 1))) return;
+      const unsigned skip = tree_coord::octant(q[0], q[1], q[2], level);
+      corner(q, level, base);
+      searchChildren(words_[accessor.pathOffset(level)], level, base, skip);
+    }
+  }
+
+ private:
+  struct Child {
+    Distance bound;
+    unsigned octant;
+  };
+
+  static void corner(const std::uint32_t q[3], unsigned level, std::uint32_t out[3]) {
+    const std::uint32_t mask = ~std::uint32_t((std::uint64_t(1) << level) - 1);
+    out[0] = q[0] & mask, out[1] = q[1] & mask, out[2] = q[2] & mask;
+  }
+
+  static void childCorner(const std::uint32_t base[3], unsigned child_level, unsigned o, std::uint32_t out[3]) {
+    const std::uint32_t size = std::uint32_t(1) << child_level;
+    out[0] = base[0] + (o & 1u) * size;
+    out[1] = base[1] + ((o >> 1) & 1u) * size;
+    out[2] = base[2] + ((o >> 2) & 1u) * size;
+  }
+
+  /** Sorts up to 8 children by their lower bounds: an insertion sort, cheapest at this size. */
+  static void order(Child* c, int n) {
+    for (int i = 1; i < n; ++i)
+      for (int j = i; j > 0 && c[j].bound < c[j - 1].bound; --j) std::swap(c[j], c[j - 1]);
+  }
+
+  /** A node word: a bitmap's target octants are uniform cubes, a reference's children are searched. */
+  void searchWord(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3]) {
+    if (!node::isBitmap(w)) {
+      searchChildren(w, level, base, 8);
+      return;
+    }
+    const std::uint32_t mask = node::octantMask(w, target_);
+    if (mask == 0) return;
+    const std::uint64_t rank = ranks_ ? ranks_[offset] : 0;
+    if (mask == 0xFFu) {  // one uniform cube of target cells
+      searchRegion(base, level, rank);
+      return;
+    }
+    const unsigned sub = level - 1;
+    Child c[8];
+    int n = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      if (!((mask >> o) & 1u)) continue;
+      std::uint32_t lo[3];
+      childCorner(base, sub, o, lo);
+      c[n++] = Child{policy_.lowerBound(lo, sub), o};
+    }
+    order(c, n);
+    for (int i = 0; i < n; ++i) {
+      if (!policy_.worthVisiting(c[i].bound)) return;
+      std::uint32_t lo[3];
+      childCorner(base, sub, c[i].octant, lo);
+      const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
+      searchRegion(lo, sub, rank + (std::uint64_t(node::popcount(before)) << (3 * sub)));
+    }
+  }
+
+  /** The children of a reference word, except octant `skip` (8: none), nearest first. */
+  void searchChildren(NodeWord w, unsigned level, const std::uint32_t base[3], unsigned skip) {
+    const std::size_t first = node::childBase(w);
+    const unsigned sub = level - 1;
+    Child c[8];
+    int n = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      const NodeWord child = words_[first + o];
+      if (o == skip || (node::isBitmap(child) && node::octantMask(child, target_) == 0)) continue;
+      std::uint32_t lo[3];
+      childCorner(base, sub, o, lo);
+      c[n++] = Child{policy_.lowerBound(lo, sub), o};
+    }
+    order(c, n);
+    for (int i = 0; i < n; ++i) {
+      if (!policy_.worthVisiting(c[i].bound)) return;
+      std::uint32_t lo[3];
+      childCorner(base, sub, c[i].octant, lo);
+      searchWord(words_[first + c[i].octant], first + c[i].octant, sub, lo);
+    }
+  }
+
+  /** A uniform cube of target cells, split in its octants as far as the policy needs. */
+  void searchRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t rank) {
+    if (level == 0) {
+      policy_.visitCell(lo, rank);
+      return;
+    }
+    if (policy_.wholeRegions()) {
+      policy_.visitRegion(lo, level, rank);
+      return;
+    }
+    const unsigned sub = level - 1;
+    Child c[8];
+    for (unsigned o = 0; o < 8; ++o) {
+      std::uint32_t child[3];
+      childCorner(lo, sub, o, child);
+      c[o] = Child{policy_.lowerBound(child, sub), o};
+    }
+    order(c, 8);
+    for (int i = 0; i < 8; ++i) {
+      if (!policy_.worthVisiting(c[i].bound)) return;
+      std::uint32_t child[3];
+      childCorner(lo, sub, c[i].octant, child);
+      searchRegion(child, sub, rank + (std::uint64_t(c[i].octant) << (3 * sub)));
+    }
+  }
+
+  const FastOctTree& tree_;
+  const NodeWord* words_;
+  CellState target_;
+  const std::uint64_t* ranks_;
+  Policy& policy_;
+};
+
+}  // namespace detail
+
+/** A cell found by NearestCellSearch, with its distance in cells (squared for the Euclidean metric). */
+struct CellMatch {
+  Key key;
+  std::int64_t distance;
+};
+
+/**
+ * Nearest-tree-neighbour queries at the cell level: the cells holding a state (Occupied by default) that
+ * lie nearest to a query cell, in the Manhattan metric of the paper or the Euclidean one. Distances are
+ * exact integers. Ties are broken by key: smaller x first, then y, then z.
+ *
+ * Keep one searcher per thread and ask it queries in spatial order: each query starts from the previous
+ * one's path (LineBurstAccess). The tree must not change while a searcher uses it.
+ */
+class NearestCellSearch {
+ public:
+  static constexpr std::int64_t kUnbounded = std::numeric_limits<std::int64_t>::max();
+
+  explicit NearestCellSearch(const FastOctTree& tree, Metric metric = Metric::Manhattan,
+                             CellState target = CellState::Occupied);
+
+  /** The nearest target cell within max_distance (inclusive); false if there is none. */
+  bool nearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
+  /** The k nearest target cells within max_distance, nearest first; returns how many. */
+  std::size_t nearestK(const Key& query, std::size_t k, std::vector<CellMatch>& matches,
+                       std::int64_t max_distance = kUnbounded);
+  /** Every target cell within `radius` (inclusive), nearest first; returns how many. */
+  std::size_t radius(const Key& query, std::int64_t radius, std::vector<CellMatch>& matches);
+
+  const FastOctTree& tree() const { return tree_; }
+  Metric metric() const { return metric_; }
+
+ private:
+  /** A cell found so far: ordered by distance, then by key (tree coordinates sort as keys do). */
+  struct Candidate {
+    std::int64_t distance;
+    std::uint32_t u[3];
+    bool operator<(const Candidate& o) const {
+      if (distance != o.distance) return distance < o.distance;
+      if (u[0] != o.u[0]) return u[0] < o.u[0];
+      if (u[1] != o.u[1]) return u[1] < o.u[1];
+      return u[2] < o.u[2];
+    }
+  };
+  class Policy;
+
+  /** Fills heap_ with the best candidates, sorted; reuses its storage from query to query. */
+  void search(const Key& query, std::size_t k, std::int64_t bound);
+  std::size_t copyMatches(std::vector<CellMatch>& matches) const;
+
+  const FastOctTree& tree_;
+  Metric metric_;
+  CellState target_;
+  ConstAccessor accessor_;
+  std::vector<Candidate> heap_;
+};
+
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,73 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/nearest_neighbor.h>
+
+namespace pcl {
+namespace fot {
+
+/**
+ * Exact nearest-neighbour queries on a point set: a FastOctTree of the points' cells, plus a compact table
+ * from each occupied cell to its points. The tree walk (see NeighbourWalk) visits cells nearest first and
+ * prunes by cell boxes; the table lists each cell's points contiguously, found by the cell's rank in the
+ * tree's Morton order.
+ *
+ * Distances are those PCL's searches report: squared Euclidean, (dx² + dy²) + dz² in float, or Manhattan,
+ * (|dx| + |dy|) + |dz|. Results are exact, nearest first, and ties go to the smaller point index.
+ * Const queries are safe from many threads at once; each thread reuses its own path from query to query.
+ */
+class PointIndex {
+ public:
+  /** Throws std::invalid_argument for a resolution that is not positive and finite. */
+  explicit PointIndex(double resolution);
+
+  /**
+   * Indexes the points at `xyz` (point i's x, y, z at byte offset i * stride_bytes), or only those whose
+   * indices `subset` lists. Points that are not finite are left out.
+   */
+  void build(const float* xyz, std::size_t count, std::size_t stride_bytes, const std::int32_t* subset = nullptr,
+             std::size_t subset_size = 0);
+
+  /** Points indexed. */
+  std::size_t size() const { return index_.size(); }
+  double resolution() const { return resolution_; }
+  const FastOctTree& tree() const { return tree_; }
+
+  /**
+   * The k nearest points to q, nearest first: their indices (as given to build) and distances. Returns how
+   * many; 0 for a query that is not finite.
+   */
+  std::size_t nearestK(const float q[3], std::size_t k, Metric metric, std::vector<std::int32_t>& indices,
+                       std::vector<float>& distances) const;
+  /**
+   * Every point within `radius` metres of q (inclusive), nearest first, or the max_results nearest of them if
+   * max_results is not 0. The distances reported are those of the metric (squared for Euclidean).
+   */
+  std::size_t radiusSearch(const float q[3], double radius, Metric metric, std::vector<std::int32_t>& indices,
+                           std::vector<float>& distances, std::size_t max_results = 0) const;
+
+  /** Bytes held: the tree, the table and the points' copies. */
+  std::size_t getMemoryBytes() const;
+
+ private:
+  class Policy;
+  std::size_t search(const float q[3], std::size_t k, double bound, Metric metric, std::vector<std::int32_t>& indices,
+                     std::vector<float>& distances) const;
+
+  double resolution_;
+  FastOctTree tree_;
+  std::uint64_t build_id_ = 0;          // tells each thread's cached path which build it belongs to
+  std::vector<std::uint64_t> ranks_;    // per pool word: rank of the first occupied cell under a bitmap word
+  std::vector<std::uint32_t> start_;    // cell rank -> first of its points in xyz_ / index_
+  std::vector<float> xyz_;              // the points, grouped by cell
+  std::vector<std::int32_t> index_;     // their indices as given to build
+  std::vector<float> outliers_xyz_;     // finite points beyond the key range: searched exhaustively
+  std::vector<std::int32_t> outliers_index_;
+};
+
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,88 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pcl/pcl_config.h>
+#include <pcl/search/kdtree.h>
+
+#include <pcl_fot/point_index.h>
+
+namespace pcl {
+namespace fot {
+namespace search {
+
+/**
+ * A pcl::search::KdTree that searches a FastOctTree instead of FLANN: ICP, CorrespondenceEstimation,
+ * NormalEstimation, EuclideanClusterExtraction and the other PCL algorithms that take a KdTree or a Search
+ * accept it as is (setSearchMethodTarget, setSearchMethod).
+ *
+ * It keeps PCL's search contract: indices refer to the input cloud even when an index subset is set;
+ * Euclidean distances are squared floats, exactly those FLANN and BruteForce compute; k-NN results come
+ * nearest first, and k = 1 always answers on a non-empty cloud; radius searches are inclusive, and with
+ * max_nn > 0 keep the nearest max_nn. Results are always nearest first, whatever setSortedResults says; ties
+ * go to the smaller index. setMetric(Metric::Manhattan) makes every distance and radius Manhattan (L1).
+ * A query that is not finite gets no results; registration inputs must be finite, as with any PCL search.
+ *
+ * setInputCloud builds the index (the tree plus a table from cells to points). Calling it again with the
+ * same cloud, indices and coordinates, as ICP does twice per align(), costs one pass over the points.
+ * Only x, y, z are used; a custom point representation is ignored.
+ */
+template <typename PointT>
+class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
+ public:
+  using Base = pcl::search::KdTree<PointT>;
+  using Ptr = shared_ptr<FastOctTreeSearch<PointT>>;
+  using ConstPtr = shared_ptr<const FastOctTreeSearch<PointT>>;
+  using typename Base::PointCloud;
+  using typename Base::PointCloudConstPtr;
+  using Base::nearestKSearch;
+  using Base::radiusSearch;
+
+  /** `resolution`: the cell edge in metres; a handful of points per cell searches fastest. */
+  explicit FastOctTreeSearch(double resolution = 0.01, bool sorted = true);
+
+#if PCL_VERSION_COMPARE(>=, 1, 14, 0)
+  bool
+#else
+  void
+#endif
+  setInputCloud(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices = IndicesConstPtr()) override;
+
+  int nearestKSearch(const PointT& point, int k, Indices& k_indices, std::vector<float>& k_sqr_distances) const override;
+  int radiusSearch(const PointT& point, double radius, Indices& k_indices, std::vector<float>& k_sqr_distances,
+                   unsigned int max_nn = 0) const override;
+
+  void setMetric(Metric metric) { metric_ = metric; }
+  Metric getMetric() const { return metric_; }
+  double getResolution() const { return index_.resolution(); }
+  const PointIndex& getPointIndex() const { return index_; }
+
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+
+ private:
+  /** Identifies what the index was built from: a repeated setInputCloud with the same input is free. */
+  struct Source {
+    const void* cloud = nullptr;
+    const void* indices = nullptr;
+    std::size_t size = 0;
+    std::uint64_t fingerprint = 0;
+    bool operator==(const Source& o) const {
+      return cloud == o.cloud && indices == o.indices && size == o.size && fingerprint == o.fingerprint;
+    }
+  };
+  Source describe(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const;
+
+  PointIndex index_;
+  Metric metric_ = Metric::Euclidean;
+  Source built_;
+};
+
+}  // namespace search
+}  // namespace fot
+}  // namespace pcl
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_fot/search/impl/fast_oct_tree_search.hpp>
+#endif

@@ -1,0 +1,84 @@
+#pragma once
+
+#include <cstring>
+
+#include <pcl/console/print.h>
+
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+namespace pcl {
+namespace fot {
+namespace search {
+
+template <typename PointT>
+FastOctTreeSearch<PointT>::FastOctTreeSearch(double resolution, bool sorted) : Base(sorted), index_(resolution) {
+  this->name_ = "FastOctTreeSearch";
+}
+
+template <typename PointT>
+typename FastOctTreeSearch<PointT>::Source FastOctTreeSearch<PointT>::describe(const PointCloudConstPtr& cloud,
+                                                                               const IndicesConstPtr& indices) const {
+  Source s{cloud.get(), indices.get(), cloud ? cloud->size() : 0, 0};
+  if (!cloud) return s;
+  // FNV-1a over the coordinates and the subset: a cloud changed in place is seen as new.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const unsigned char* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  for (const auto& p : *cloud) mix(&p.x, 3 * sizeof(float));
+  if (indices && !indices->empty()) mix(indices->data(), indices->size() * sizeof(index_t));
+  s.fingerprint = h;
+  return s;
+}
+
+template <typename PointT>
+#if PCL_VERSION_COMPARE(>=, 1, 14, 0)
+bool
+#else
+void
+#endif
+FastOctTreeSearch<PointT>::setInputCloud(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) {
+  this->input_ = cloud;
+  this->indices_ = indices;
+  const Source source = describe(cloud, indices);
+  if (!(source == built_)) {
+    if (!cloud || cloud->empty()) {
+      if (!cloud) PCL_ERROR("[pcl::fot::search::FastOctTreeSearch::setInputCloud] No input cloud.\n");
+      index_.build(nullptr, 0, sizeof(PointT));
+    } else if (indices) {
+      index_.build(&(*cloud)[0].x, cloud->size(), sizeof(PointT), indices->data(), indices->size());
+    } else {
+      index_.build(&(*cloud)[0].x, cloud->size(), sizeof(PointT));
+    }
+    built_ = source;
+  }
+#if PCL_VERSION_COMPARE(>=, 1, 14, 0)
+  return cloud != nullptr;
+#endif
+}
+
+template <typename PointT>
+int FastOctTreeSearch<PointT>::nearestKSearch(const PointT& point, int k, Indices& k_indices,
+                                              std::vector<float>& k_sqr_distances) const {
+  const float q[3] = {point.x, point.y, point.z};
+  if (k <= 0) {
+    k_indices.clear();
+    k_sqr_distances.clear();
+    return 0;
+  }
+  return int(index_.nearestK(q, std::size_t(k), metric_, k_indices, k_sqr_distances));
+}
+
+template <typename PointT>
+int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, Indices& k_indices,
+                                            std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
+  const float q[3] = {point.x, point.y, point.z};
+  return int(index_.radiusSearch(q, radius, metric_, k_indices, k_sqr_distances, max_nn));
+}
+
+}  // namespace search
+}  // namespace fot
+}  // namespace pcl
+
+#define PCL_INSTANTIATE_FastOctTreeSearch(T) template class PCL_EXPORTS pcl::fot::search::FastOctTreeSearch<T>;

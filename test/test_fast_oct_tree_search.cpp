@@ -1,0 +1,212 @@
+// FastOctTreeSearch against FLANN and brute force: the same distances, to the bit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <flann/flann.hpp>
+#include <pcl/common/point_tests.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/search/brute_force.h>
+
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+#include "scan_data.h"
+
+using pcl::PointXYZ;
+using Cloud = pcl::PointCloud<PointXYZ>;
+using Search = pcl::fot::search::FastOctTreeSearch<PointXYZ>;
+
+namespace {
+
+/** FLANN's exact kd-tree in the Manhattan metric, over the finite points; answers cloud indices. */
+class FlannL1 {
+ public:
+  explicit FlannL1(const Cloud& cloud) {
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      if (pcl::isFinite(cloud[i])) {
+        data_.insert(data_.end(), {cloud[i].x, cloud[i].y, cloud[i].z});
+        ids_.push_back(int(i));
+      }
+    index_.reset(new flann::Index<flann::L1<float>>(flann::Matrix<float>(data_.data(), ids_.size(), 3),
+                                                     flann::KDTreeSingleIndexParams(15)));
+    index_->buildIndex();
+  }
+  float nearest(const PointXYZ& q) const {
+    float query[3] = {q.x, q.y, q.z};
+    int index;
+    float dist;
+    flann::Matrix<int> i(&index, 1, 1);
+    flann::Matrix<float> d(&dist, 1, 1);
+    index_->knnSearch(flann::Matrix<float>(query, 1, 3), i, d, 1, flann::SearchParams(-1, 0.0f));
+    return dist;
+  }
+
+ private:
+  std::vector<float> data_;
+  std::vector<int> ids_;
+  std::unique_ptr<flann::Index<flann::L1<float>>> index_;
+};
+
+/** Every finite query point of `queries` into `target`: 1-NN distances equal FLANN's in L2 and L1. */
+void expectSameAsFlann(const std::string& target_name, const std::string& query_name, double res) {
+  const Cloud::Ptr target = pcl_fot_test::loadScan(target_name);
+  const Cloud::Ptr queries = pcl_fot_test::loadScan(query_name);
+  pcl::KdTreeFLANN<PointXYZ> flann_l2;
+  flann_l2.setInputCloud(target);
+  FlannL1 flann_l1(*target);
+  Search ours(res), ours_l1(res);
+  ours.setInputCloud(target);
+  ours_l1.setMetric(pcl::fot::Metric::Manhattan);
+  ours_l1.setInputCloud(target);
+
+  pcl::Indices a, b;
+  std::vector<float> da, db;
+  std::size_t compared = 0;
+  for (const auto& q : *queries) {
+    if (!pcl::isFinite(q)) continue;
+    ASSERT_EQ(flann_l2.nearestKSearch(q, 1, a, da), 1);
+    ASSERT_EQ(ours.nearestKSearch(q, 1, b, db), 1);
+    ASSERT_EQ(da[0], db[0]) << "L2 1-NN of (" << q.x << ", " << q.y << ", " << q.z << ")";
+    ASSERT_EQ(ours_l1.nearestKSearch(q, 1, b, db), 1);
+    ASSERT_EQ(flann_l1.nearest(q), db[0]) << "L1 1-NN";
+    ++compared;
+  }
+  EXPECT_GT(compared, 100000u);
+}
+
+}  // namespace
+
+TEST(FastOctTreeSearch, SameDistancesAsFlannForEveryKinectPoint) {
+  expectSameAsFlann("kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02);
+}
+
+TEST(FastOctTreeSearch, SameDistancesAsFlannOnTheRoomScans) {
+  expectSameAsFlann("room_scan1.pcd", "room_scan2.pcd", 0.1);
+}
+
+/**
+ * BruteForce sums the squares as Eigen does, dx² + (dy² + dz²), where FLANN and we sum (dx² + dy²) + dz²;
+ * the last bit may differ. So its neighbours' distances are re-evaluated FLANN's way before comparing.
+ */
+std::vector<float> flannDistances(const Cloud& cloud, const PointXYZ& q, const pcl::Indices& idx) {
+  std::vector<float> d;
+  for (pcl::index_t i : idx) {
+    const float dx = cloud[i].x - q.x, dy = cloud[i].y - q.y, dz = cloud[i].z - q.z;
+    d.push_back(dx * dx + dy * dy + dz * dz);
+  }
+  std::sort(d.begin(), d.end());
+  return d;
+}
+
+TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
+  const Cloud::Ptr target = pcl_fot_test::loadScan("kinect_capture0003.pcd");
+  const Cloud::Ptr queries = pcl_fot_test::loadScan("kinect_capture0001.pcd");
+  pcl::search::BruteForce<PointXYZ> brute(true);
+  brute.setInputCloud(target);
+  for (double res : {0.005, 0.03}) {
+    Search ours(res);
+    ours.setInputCloud(target);
+    pcl::Indices a, b;
+    std::vector<float> da, db;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < queries->size(); i += 997) {
+      const PointXYZ& q = (*queries)[i];
+      if (!pcl::isFinite(q)) continue;
+      ASSERT_EQ(brute.nearestKSearch(q, 12, a, da), ours.nearestKSearch(q, 12, b, db));
+      ASSERT_EQ(flannDistances(*target, q, a), db) << "k-NN distances, nearest first";
+      const double r = std::sqrt(0.5 * (double(db[10]) + double(db[11])));  // no point on the sphere
+      brute.radiusSearch(q, r, a, da);
+      ours.radiusSearch(q, r, b, db);
+      ASSERT_EQ(flannDistances(*target, q, a), db) << "radius search";
+      const std::vector<float> all = db;
+      ASSERT_EQ(ours.radiusSearch(q, r, b, db, 5), 5) << "max_nn keeps the nearest";
+      ASSERT_EQ(std::vector<float>(all.begin(), all.begin() + 5), db);
+      ++n;
+    }
+    EXPECT_GT(n, 200u);
+  }
+}
+
+TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
+  const Cloud::Ptr cloud = pcl_fot_test::loadScan("kinect_capture0002.pcd");  // organised: NaN points
+  auto subset = std::make_shared<pcl::Indices>();
+  for (pcl::index_t i = 0; i < pcl::index_t(cloud->size()); i += 3) subset->push_back(i);
+  Search ours(0.02);
+  ours.setInputCloud(cloud, subset);
+  EXPECT_EQ(ours.getInputCloud(), cloud);
+  EXPECT_EQ(ours.getIndices(), subset);
+  EXPECT_EQ(ours.getName(), "FastOctTreeSearch");
+
+  pcl::search::BruteForce<PointXYZ> brute;
+  brute.setInputCloud(cloud, subset);
+  pcl::Indices a, b;
+  std::vector<float> da, db;
+  for (std::size_t i = 1; i < cloud->size(); i += 1003) {
+    const PointXYZ& q = (*cloud)[i];
+    if (!pcl::isFinite(q)) {
+      EXPECT_EQ(ours.nearestKSearch(q, 1, b, db), 0) << "a NaN query gets no results";
+      EXPECT_TRUE(b.empty());
+      continue;
+    }
+    ASSERT_EQ(ours.nearestKSearch(q, 3, b, db), 3);
+    brute.nearestKSearch(q, 3, a, da);
+    ASSERT_EQ(flannDistances(*cloud, q, a), db);
+    for (pcl::index_t idx : b) {
+      EXPECT_EQ(idx % 3, 0) << "only indices of the subset, as cloud indices";
+      EXPECT_TRUE(pcl::isFinite((*cloud)[idx])) << "never a NaN point";
+    }
+    EXPECT_TRUE(std::is_sorted(db.begin(), db.end()));
+  }
+  // k = 1 answers even far from the cloud.
+  EXPECT_EQ(ours.nearestKSearch(PointXYZ(1e6f, -1e6f, 3e5f), 1, b, db), 1);
+  // The (index) overload addresses the subset, as pcl::search::Search defines it.
+  pcl::index_t at = 0;
+  while (!pcl::isFinite((*cloud)[(*subset)[at]])) ++at;
+  ASSERT_EQ(ours.nearestKSearch(at, 1, b, db), 1);
+  EXPECT_EQ(db[0], 0.0f);
+  EXPECT_EQ((*cloud)[b[0]].getVector3fMap(), (*cloud)[(*subset)[at]].getVector3fMap());
+}
+
+TEST(FastOctTreeSearch, RepeatedInputIsCheapAndChangesAreSeen) {
+  Cloud::Ptr cloud(new Cloud(*pcl_fot_test::loadScan("room_scan1.pcd")));
+  Search ours(0.1);
+  ours.setInputCloud(cloud);
+  const pcl::fot::PointIndex* index = &ours.getPointIndex();
+  const std::size_t pool = index->tree().poolWords();
+  ours.setInputCloud(cloud);  // ICP does this twice per align()
+  pcl::Indices b;
+  std::vector<float> db;
+  ASSERT_EQ(ours.nearestKSearch((*cloud)[100], 1, b, db), 1);
+  EXPECT_EQ(b[0], 100);
+  EXPECT_EQ(index->tree().poolWords(), pool);
+  (*cloud)[100].x += 5.0f;  // changed in place: the next setInputCloud rebuilds
+  ours.setInputCloud(cloud);
+  PointXYZ moved = (*cloud)[100];
+  ASSERT_EQ(ours.nearestKSearch(moved, 1, b, db), 1);
+  EXPECT_EQ(b[0], 100);
+  EXPECT_EQ(db[0], 0.0f);
+}
+
+TEST(FastOctTreeSearch, EmptyAndDegenerateClouds) {
+  Search ours(0.05);
+  Cloud::Ptr empty(new Cloud);
+  ours.setInputCloud(empty);
+  pcl::Indices b;
+  std::vector<float> db;
+  EXPECT_EQ(ours.nearestKSearch(PointXYZ(0, 0, 0), 1, b, db), 0);
+  Cloud::Ptr nans(new Cloud);
+  nans->push_back(PointXYZ(std::nanf(""), 0, 0));
+  ours.setInputCloud(nans);
+  EXPECT_EQ(ours.nearestKSearch(PointXYZ(0, 0, 0), 1, b, db), 0);
+  // Points thousands of kilometres apart: beyond any key range around a 5 cm grid, still found exactly.
+  Cloud::Ptr far(new Cloud);
+  far->push_back(PointXYZ(0, 0, 0));
+  far->push_back(PointXYZ(3e7f, 0, 0));
+  ours.setInputCloud(far);
+  ASSERT_EQ(ours.nearestKSearch(PointXYZ(2.9e7f, 0, 0), 1, b, db), 1);
+  EXPECT_EQ(b[0], 1);
+  ASSERT_EQ(ours.nearestKSearch(PointXYZ(1, 0, 0), 2, b, db), 2);
+  EXPECT_EQ(b[0], 0);
+  EXPECT_THROW(Search(0.0), std::invalid_argument);
+}

@@ -1,0 +1,128 @@
+// The nearest-tree-neighbour search against brute force, cell for cell and tie for tie.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/point_cloud_insertion.h>
+
+#include "scan_data.h"
+
+using namespace pcl::fot;
+
+namespace {
+
+std::int64_t distance(Metric m, const Key& a, const Key& b) {
+  const std::int64_t d[3] = {std::abs(std::int64_t(a.x) - b.x), std::abs(std::int64_t(a.y) - b.y),
+                             std::abs(std::int64_t(a.z) - b.z)};
+  return m == Metric::Manhattan ? d[0] + d[1] + d[2] : d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+/** All cells of a state, with their distance to q, in the search's order: distance, then x, y, z. */
+std::vector<CellMatch> bruteForce(const std::vector<Key>& cells, Metric m, const Key& q) {
+  std::vector<CellMatch> all;
+  for (const Key& c : cells) all.push_back({c, distance(m, c, q)});
+  std::sort(all.begin(), all.end(), [](const CellMatch& a, const CellMatch& b) {
+    return std::tie(a.distance, a.key.x, a.key.y, a.key.z) < std::tie(b.distance, b.key.x, b.key.y, b.key.z);
+  });
+  return all;
+}
+
+void expectSame(const std::vector<CellMatch>& expected, const std::vector<CellMatch>& got, const char* what) {
+  ASSERT_EQ(expected.size(), got.size()) << what;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(expected[i].key, got[i].key) << what << " #" << i;
+    ASSERT_EQ(expected[i].distance, got[i].distance) << what << " #" << i;
+  }
+}
+
+/** Checks 1-NN, k-NN, bounded and radius queries against brute force for every query. */
+void checkQueries(const FastOctTree& tree, CellState target, const std::vector<Key>& queries) {
+  std::vector<Key> cells;
+  tree.forEachCell(target, [&](const Key& k) { cells.push_back(k); });
+  ASSERT_FALSE(cells.empty());
+  for (Metric m : {Metric::Manhattan, Metric::Euclidean}) {
+    NearestCellSearch search(tree, m, target);
+    std::vector<CellMatch> got;
+    for (const Key& q : queries) {
+      const std::vector<CellMatch> all = bruteForce(cells, m, q);
+      CellMatch one;
+      ASSERT_TRUE(search.nearest(q, one));
+      ASSERT_EQ(one.key, all[0].key) << "1-NN of " << toString(q);
+      ASSERT_EQ(one.distance, all[0].distance);
+      search.nearestK(q, 7, got);
+      expectSame(std::vector<CellMatch>(all.begin(), all.begin() + std::min<std::size_t>(7, all.size())), got,
+                 "k-NN");
+      const std::int64_t r = all[std::min<std::size_t>(12, all.size() - 1)].distance;
+      search.radius(q, r, got);
+      std::vector<CellMatch> within;
+      for (const CellMatch& c : all)
+        if (c.distance <= r) within.push_back(c);
+      expectSame(within, got, "radius");
+      // Bounded: nothing nearer than the bound means no answer.
+      EXPECT_FALSE(search.nearest(q, one, all[0].distance - 1));
+      EXPECT_TRUE(search.nearest(q, one, all[0].distance));
+    }
+  }
+}
+
+}  // namespace
+
+TEST(NearestCellSearch, RandomClustersWithCollapsedCubes) {
+  FastOctTree tree(0.1);
+  std::mt19937 rng(41);
+  // Scattered cells, plus full cubes that collapse into single words.
+  for (int i = 0; i < 3000; ++i)
+    tree.setCell({std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 100) - 50},
+                 (rng() % 4) ? CellState::Occupied : CellState::Free);
+  for (int c = 0; c < 20; ++c) {
+    const Key base{std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 60) - 30};
+    const int side = 2 << (rng() % 3);
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) tree.setCell({base.x + x, base.y + y, base.z + z}, CellState::Occupied);
+  }
+  std::vector<Key> queries;
+  for (int i = 0; i < 300; ++i)
+    queries.push_back({std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 200) - 100});
+  queries.push_back({kMaxKey, kMinKey, 0});  // far outside the map
+  checkQueries(tree, CellState::Occupied, queries);
+  checkQueries(tree, CellState::Free, queries);
+}
+
+TEST(NearestCellSearch, RealScansInSpatialOrder) {
+  const VoxelGrid grid(0.05);
+  FastOctTree target(grid), query_map(grid);
+  insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
+  insertPointCloud(query_map, *pcl_fot_test::loadScan("room_scan2.pcd"));
+  std::vector<Key> queries;
+  std::size_t i = 0;
+  query_map.forEachCell(CellState::Occupied, [&](const Key& k) {
+    if (i++ % 23 == 0) queries.push_back(k);  // Morton order: the path is reused from query to query
+  });
+  checkQueries(target, CellState::Occupied, queries);
+}
+
+TEST(NearestCellSearch, EdgeCases) {
+  FastOctTree empty(0.1);
+  NearestCellSearch search(empty);
+  CellMatch m;
+  EXPECT_FALSE(search.nearest({0, 0, 0}, m)) << "an empty map has no neighbour";
+  std::vector<CellMatch> got;
+  EXPECT_EQ(search.nearestK({1, 2, 3}, 5, got), 0u);
+  EXPECT_THROW(search.nearest({kMaxKey + 1, 0, 0}, m), std::out_of_range);
+  EXPECT_THROW(NearestCellSearch(empty, Metric::Manhattan, CellState::Unknown), std::invalid_argument);
+
+  FastOctTree one(0.1);
+  one.setCell({kMaxKey, kMaxKey, kMaxKey}, CellState::Occupied);
+  NearestCellSearch far(one);
+  ASSERT_TRUE(far.nearest({kMinKey, kMinKey, kMinKey}, m));
+  EXPECT_EQ(m.distance, 3 * (std::int64_t(kMaxKey) - kMinKey)) << "distances across the whole key range are exact";
+  NearestCellSearch far_l2(one, Metric::Euclidean);
+  ASSERT_TRUE(far_l2.nearest({kMinKey, kMinKey, kMinKey}, m));
+  EXPECT_EQ(m.distance, 3 * (std::int64_t(kMaxKey) - kMinKey) * (std::int64_t(kMaxKey) - kMinKey));
+}

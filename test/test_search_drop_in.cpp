@@ -1,0 +1,136 @@
+// FastOctTreeSearch inside PCL's algorithms: ICP, NormalEstimation, EuclideanClusterExtraction.
+#include <gtest/gtest.h>
+
+#include <pcl/common/point_tests.h>
+#include <pcl/common/transforms.h>
+#include <pcl/features/normal_3d.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/registration/icp.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+#include "scan_data.h"
+
+using pcl::PointXYZ;
+using Cloud = pcl::PointCloud<PointXYZ>;
+using Search = pcl::fot::search::FastOctTreeSearch<PointXYZ>;
+
+TEST(SearchDropIn, IcpRecoversAKnownTransform) {
+  Cloud::Ptr target(new Cloud), source(new Cloud);
+  pcl::VoxelGrid<PointXYZ> grid;
+  grid.setInputCloud(pcl_fot_test::loadScan("room_scan1.pcd"));
+  grid.setLeafSize(0.1f, 0.1f, 0.1f);
+  grid.filter(*target);
+  const Eigen::Affine3f truth =
+      Eigen::Translation3f(0.25f, -0.15f, 0.05f) * Eigen::AngleAxisf(0.06f, Eigen::Vector3f::UnitZ());
+  pcl::transformPointCloud(*target, *source, truth.inverse());
+
+  pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
+  icp.setSearchMethodTarget(Search::Ptr(new Search(0.1)));
+  icp.setInputSource(source);
+  icp.setInputTarget(target);
+  icp.setMaximumIterations(100);
+  icp.setTransformationEpsilon(1e-10);
+  icp.setMaxCorrespondenceDistance(1.0);
+  Cloud aligned;
+  icp.align(aligned);
+  ASSERT_TRUE(icp.hasConverged());
+  const Eigen::Matrix4f error = icp.getFinalTransformation() * truth.inverse().matrix();
+  EXPECT_LT((error.block<3, 1>(0, 3)).norm(), 0.01) << "translation recovered within 1 cm";
+  EXPECT_LT(Eigen::AngleAxisf(Eigen::Matrix3f(error.block<3, 3>(0, 0))).angle(), 0.002) << "rotation within 0.1°";
+  EXPECT_LT(icp.getFitnessScore(), 1e-4);
+}
+
+/**
+ * The same neighbours give the same normals. Two things are ambiguous by nature and left out: a point whose
+ * k-th and (k+1)-th neighbours lie at exactly the same distance (FLANN and we may each keep either), and for
+ * radius searches a neighbour exactly on the sphere (KdTreeFLANN keeps d < float(r²), ours d <= r², as
+ * BruteForce). Neighbours at
+ * equal distance also come in FLANN's traversal order there and by index here, and the covariance sums them
+ * in that order, so the normals agree to float rounding, not always to the last bit.
+ */
+TEST(SearchDropIn, NormalEstimationGivesTheSameNormals) {
+  const Cloud::Ptr cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
+  pcl::search::KdTree<PointXYZ>::Ptr kdtree(new pcl::search::KdTree<PointXYZ>);
+  Search::Ptr ours(new Search(0.01));
+  kdtree->setInputCloud(cloud);
+  ours->setInputCloud(cloud);
+  constexpr int k = 12;
+  constexpr double radius = 0.03;
+  std::vector<bool> ambiguous_k(cloud->size(), false), ambiguous_r(cloud->size(), false);
+  pcl::Indices a, b;
+  std::vector<float> da, db;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    if (!pcl::isFinite((*cloud)[i])) continue;
+    kdtree->nearestKSearch((*cloud)[i], k, a, da);
+    ours->nearestKSearch((*cloud)[i], k + 1, b, db);
+    ASSERT_EQ(da, std::vector<float>(db.begin(), db.begin() + k)) << "the same neighbour distances, point " << i;
+    ambiguous_k[i] = db.size() > std::size_t(k) && db[k - 1] == db[k];
+    ours->radiusSearch((*cloud)[i], radius, b, db);
+    // KdTreeFLANN keeps d < float(r²); BruteForce and we keep d <= r² in double.
+    ambiguous_r[i] = !db.empty() && db.back() >= float(radius * radius);
+  }
+
+  for (bool by_radius : {false, true}) {
+    pcl::NormalEstimation<PointXYZ, pcl::Normal> ne;
+    ne.setInputCloud(cloud);
+    if (by_radius)
+      ne.setRadiusSearch(radius);
+    else
+      ne.setKSearch(k);
+    pcl::PointCloud<pcl::Normal> with_kdtree, with_fot;
+    ne.setSearchMethod(kdtree);
+    ne.compute(with_kdtree);
+    ne.setSearchMethod(ours);
+    ne.compute(with_fot);
+    ASSERT_EQ(with_kdtree.size(), with_fot.size());
+    std::size_t compared = 0, skipped = 0;
+    for (std::size_t i = 0; i < with_fot.size(); ++i) {
+      const auto& x = with_kdtree[i];
+      const auto& y = with_fot[i];
+      if ((by_radius ? ambiguous_r : ambiguous_k)[i]) {
+        ++skipped;
+        continue;
+      }
+      ASSERT_EQ(std::isfinite(x.normal_x), std::isfinite(y.normal_x)) << "point " << i;
+      if (!std::isfinite(x.normal_x)) continue;
+      ASSERT_NEAR(x.normal_x, y.normal_x, 1e-4) << "point " << i;
+      ASSERT_NEAR(x.normal_y, y.normal_y, 1e-4) << "point " << i;
+      ASSERT_NEAR(x.normal_z, y.normal_z, 1e-4) << "point " << i;
+      ASSERT_NEAR(x.curvature, y.curvature, 1e-4) << "point " << i;
+      ++compared;
+    }
+    EXPECT_GT(compared, 200000u);
+    EXPECT_LT(skipped, compared / 4) << "ambiguous neighbourhoods are the exception";
+  }
+}
+
+TEST(SearchDropIn, EuclideanClustersAreTheSame) {
+  Cloud::Ptr cloud(new Cloud);
+  pcl::VoxelGrid<PointXYZ> grid;
+  grid.setInputCloud(pcl_fot_test::loadScan("room_scan2.pcd"));
+  grid.setLeafSize(0.05f, 0.05f, 0.05f);
+  grid.filter(*cloud);
+  auto clusters = [&](const pcl::search::Search<PointXYZ>::Ptr& search) {
+    pcl::EuclideanClusterExtraction<PointXYZ> ec;
+    ec.setClusterTolerance(0.12);
+    ec.setMinClusterSize(20);
+    ec.setMaxClusterSize(1000000);
+    ec.setSearchMethod(search);
+    ec.setInputCloud(cloud);
+    std::vector<pcl::PointIndices> out;
+    ec.extract(out);
+    std::vector<pcl::Indices> sets;
+    for (auto& c : out) {
+      std::sort(c.indices.begin(), c.indices.end());
+      sets.push_back(c.indices);
+    }
+    std::sort(sets.begin(), sets.end());
+    return sets;
+  };
+  const auto expected = clusters(pcl::search::KdTree<PointXYZ>::Ptr(new pcl::search::KdTree<PointXYZ>));
+  const auto got = clusters(Search::Ptr(new Search(0.05)));
+  EXPECT_GT(expected.size(), 3u);
+  EXPECT_EQ(expected, got);
+}
