@@ -18,16 +18,15 @@ class NearestCellSearch::Policy {
         limit_(limit),
         heap_(heap) {}
 
-  Distance lowerBound(const std::uint32_t lo[3], unsigned level) const {
-    const std::int64_t last = (std::int64_t(1) << level) - 1;
-    std::int64_t gap[3];
-    for (int a = 0; a < 3; ++a) {
-      const std::int64_t d = std::max<std::int64_t>(
-          {std::int64_t(lo[a]) - q_[a], std::int64_t(q_[a]) - (std::int64_t(lo[a]) + last), 0});
-      // Capped: no two valid keys are farther apart, and a smaller lower bound stays a lower bound.
-      gap[a] = std::min<std::int64_t>(d, kMaxGap);
-    }
-    return combine(gap);
+  void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const {
+    const std::int64_t half = std::int64_t(1) << child_level;
+    for (int a = 0; a < 3; ++a)
+      for (int h = 0; h < 2; ++h) {
+        const std::int64_t first = std::int64_t(lo[a]) + h * half, last = first + half - 1;
+        // Capped: no two valid keys are farther apart, and a smaller lower bound stays a lower bound.
+        const std::int64_t d = std::min<std::int64_t>(std::max<std::int64_t>({first - q_[a], q_[a] - last, 0}), kMaxGap);
+        gap[a][h] = metric_ == Metric::Manhattan ? d : d * d;
+      }
   }
 
   Distance exterior(const std::uint32_t lo[3], unsigned level) const {

@@ -16,6 +16,7 @@ namespace {
 struct Hit {
   float distance;
   std::int32_t index;
+  std::uint32_t slot;  // where the point sits in the table
   bool operator<(const Hit& o) const { return distance < o.distance || (distance == o.distance && index < o.index); }
 };
 
@@ -50,6 +51,7 @@ std::uint64_t assignRanks(const FastOctTree& tree, NodeWord w, std::size_t offse
 }
 
 std::atomic<std::uint64_t> next_build_id{1};
+constexpr std::uint32_t kNoSlot = ~std::uint32_t(0);
 
 }  // namespace
 
@@ -58,45 +60,68 @@ class PointIndex::Policy {
  public:
   using Distance = double;
 
-  Policy(const PointIndex& index, const float q[3], Metric metric, std::size_t k, double limit, std::vector<Hit>& heap)
-      : index_(index), grid_(index.tree_.getGrid()), q_{q[0], q[1], q[2]}, metric_(metric), k_(k), limit_(limit),
-        heap_(heap) {}
+  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into metres. */
+  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k, double limit,
+         std::vector<Hit>& heap)
+      : index_(index), q_{q[0], q[1], q[2]}, qc_{qc[0], qc[1], qc[2]}, metric_(metric), k_(k), limit_(limit),
+        bound_(limit), heap_(heap) {
+    const double res = index.tree_.getGrid().resolution();
+    scale_ = metric == Metric::Euclidean ? res * res : res;
+  }
 
   // Bounds are shaded down a little: a float distance may come out up to a few ulps below the exact one.
-  Distance lowerBound(const std::uint32_t lo[3], unsigned level) const {
-    double gap[3];
+  void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const {
+    const double half = double(std::uint64_t(1) << child_level);
     for (int a = 0; a < 3; ++a) {
-      double box_lo, box_hi;
-      box(lo[a], level, a, box_lo, box_hi);
-      gap[a] = std::max({box_lo - q_[a], q_[a] - box_hi, 0.0});
+      const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
+      const double below = std::max({low - qc_[a], qc_[a] - mid, 0.0}), above = std::max({mid - qc_[a], qc_[a] - high, 0.0});
+      gap[a][0] = shade((metric_ == Metric::Euclidean ? below * below : below) * scale_);
+      gap[a][1] = shade((metric_ == Metric::Euclidean ? above * above : above) * scale_);
     }
-    return shade(combine(gap));
   }
 
   Distance exterior(const std::uint32_t lo[3], unsigned level) const {
+    const double side = double(std::uint64_t(1) << level);
     double nearest = std::numeric_limits<double>::infinity();
     for (int a = 0; a < 3; ++a) {
-      double box_lo, box_hi;
-      box(lo[a], level, a, box_lo, box_hi);
-      nearest = std::min({nearest, q_[a] - box_lo, box_hi - q_[a]});
+      const double box_lo = double(tree_coord::toKey(lo[a]));
+      nearest = std::min({nearest, qc_[a] - box_lo, box_lo + side - qc_[a]});
     }
     nearest = std::max(nearest, 0.0);
-    return shade(metric_ == Metric::Euclidean ? nearest * nearest : nearest);
+    return shade((metric_ == Metric::Euclidean ? nearest * nearest : nearest) * scale_);
   }
 
-  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
-  bool settled(Distance exterior) const { return bound() < exterior; }
+  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
+  bool settled(Distance exterior) const { return bound_ < exterior; }
   bool wholeRegions() const { return false; }
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
 
+  /** A cell's points: a tight loop per metric that only leaves it for points within the bound. */
   void visitCell(const std::uint32_t[3], std::uint64_t rank) {
-    const std::uint32_t end = index_.start_[rank + 1];
-    for (std::uint32_t i = index_.start_[rank]; i < end; ++i) offer(&index_.xyz_[3 * std::size_t(i)], index_.index_[i]);
+    const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
+    const float* p = &index_.xyz_[3 * std::size_t(begin)];
+    if (metric_ == Metric::Euclidean) {
+      for (std::uint32_t i = begin; i < end; ++i, p += 3) {
+        const float dx = p[0] - q_[0], dy = p[1] - q_[1], dz = p[2] - q_[2];
+        const float d = dx * dx + dy * dy + dz * dz;
+        if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
+      }
+    } else {
+      for (std::uint32_t i = begin; i < end; ++i, p += 3) {
+        const float d = std::fabs(p[0] - q_[0]) + std::fabs(p[1] - q_[1]) + std::fabs(p[2] - q_[2]);
+        if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
+      }
+    }
   }
 
-  void offer(const float* p, std::int32_t index) {
-    const Hit h{pointDistance(metric_, p, q_), index};
-    if (double(h.distance) > bound()) return;
+  void offer(const float* p, std::int32_t index, std::uint32_t slot) {
+    const Hit h{pointDistance(metric_, p, q_), index, slot};
+    if (double(h.distance) <= bound_) keep(h);
+  }
+
+ private:
+  /** A point within the bound joins the k best. */
+  void keep(const Hit& h) {
     if (heap_.size() < k_) {
       heap_.push_back(h);
       std::push_heap(heap_.begin(), heap_.end());
@@ -104,27 +129,22 @@ class PointIndex::Policy {
       std::pop_heap(heap_.begin(), heap_.end());
       heap_.back() = h;
       std::push_heap(heap_.begin(), heap_.end());
+    } else {
+      return;
     }
+    if (heap_.size() == k_) bound_ = std::min(limit_, double(heap_.front().distance));
   }
 
- private:
-  /** The extent in metres of a cube's side along one axis. */
-  void box(std::uint32_t lo, unsigned level, int axis, double& box_lo, double& box_hi) const {
-    box_lo = grid_.origin()[axis] + double(tree_coord::toKey(lo)) * grid_.resolution();
-    box_hi = box_lo + std::ldexp(grid_.resolution(), int(level));
-  }
-  double combine(const double g[3]) const {
-    return metric_ == Metric::Euclidean ? g[0] * g[0] + g[1] * g[1] + g[2] * g[2] : g[0] + g[1] + g[2];
-  }
   static double shade(double d) { return d * (1.0 - 4e-6); }
-  double bound() const { return heap_.size() < k_ ? limit_ : std::min(limit_, double(heap_.front().distance)); }
 
   const PointIndex& index_;
-  const VoxelGrid& grid_;
   float q_[3];
+  double qc_[3];  // the query in cells from the grid origin
+  double scale_;  // cell units to the metric's units
   Metric metric_;
   std::size_t k_;
   double limit_;
+  double bound_;  // what a point must not exceed: the k-th best so far, else the limit
   std::vector<Hit>& heap_;
 };
 
@@ -217,28 +237,37 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   thread_local const PointIndex* owner = nullptr;
   thread_local std::uint64_t owner_build = 0;
   thread_local std::optional<ConstAccessor> accessor;
-  if (owner != this || owner_build != build_id_ || !accessor) {
+  const bool accessor_fresh = owner != this || owner_build != build_id_ || !accessor;
+  if (accessor_fresh) {
     accessor.emplace(tree_);
     owner = this;
     owner_build = build_id_;
   }
 
-  thread_local std::vector<Hit> heap;
-  heap.clear();
-  Policy policy(*this, q, metric, k, bound, heap);
+  // The walk starts in the query's cell; any nearby cell would give the same, exact, answer, so the cell
+  // comes from the reciprocal, clamped for far queries, rather than from pointToKey's exact division.
   const VoxelGrid& grid = tree_.getGrid();
-  Key key;
-  if (!grid.pointToKey(q[0], q[1], q[2], key)) {  // far away: start from the nearest representable cell
-    std::int32_t* axes[3] = {&key.x, &key.y, &key.z};
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::floor((double(q[a]) - grid.origin()[a]) / grid.resolution());
-      *axes[a] = std::int32_t(std::clamp(c, double(kMinKey), double(kMaxKey)));
-    }
+  const double inverse = 1.0 / grid.resolution();
+  double qc[3];
+  std::int32_t cell[3];
+  for (int a = 0; a < 3; ++a) {
+    qc[a] = (double(q[a]) - grid.origin()[a]) * inverse;
+    cell[a] = std::int32_t(std::clamp(std::floor(qc[a]), double(kMinKey), double(kMaxKey)));
   }
+  const Key key{cell[0], cell[1], cell[2]};
+  thread_local std::vector<Hit> heap;
+  thread_local std::uint32_t last_slot = kNoSlot;  // this thread's previous nearest point on this build
+  if (accessor_fresh) last_slot = kNoSlot;
+  heap.clear();
+  Policy policy(*this, q, qc, metric, k, bound, heap);
+  // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
+  // a point twice is harmless for one neighbour (the repeat does not beat itself).
+  if (k == 1 && last_slot != kNoSlot) policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
   if (!index_.empty()) detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
-  for (std::size_t i = 0; i < outliers_index_.size(); ++i) policy.offer(&outliers_xyz_[3 * i], outliers_index_[i]);
+  for (std::size_t i = 0; i < outliers_index_.size(); ++i) policy.offer(&outliers_xyz_[3 * i], outliers_index_[i], kNoSlot);
 
   std::sort(heap.begin(), heap.end());
+  if (k == 1 && !heap.empty()) last_slot = heap.front().slot;
   indices.reserve(heap.size());
   distances.reserve(heap.size());
   for (const Hit& h : heap) {

@@ -26,8 +26,10 @@ namespace detail {
  *
  * The Policy knows the query and the metric and keeps the result:
  *   using Distance;
- *   Distance lowerBound(const std::uint32_t lo[3], unsigned level) const;  // nothing in the cube is nearer
- *   Distance exterior(const std::uint32_t lo[3], unsigned level) const;    // the query's cube: nothing outside is nearer
+ *   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const;
+ *       // for the cube at `lo` with children of child_level: per axis, the query's distance to the lower (0) and
+ *       // upper (1) half, in the metric's units (squared for Euclidean). A child's lower bound sums its halves'.
+ *   Distance exterior(const std::uint32_t lo[3], unsigned level) const;  // the query's cube: nothing outside is nearer
  *   bool worthVisiting(Distance lower_bound) const;
  *   bool settled(Distance exterior) const;
  *   bool wholeRegions() const;  // visit uniform cubes whole rather than cell by cell
@@ -56,12 +58,12 @@ class NeighbourWalk {
                                 tree_coord::fromKey(query.z)};
     std::uint32_t base[3];
     corner(q, bottom, base);
-    searchWord(words_[accessor.pathOffset(bottom)], accessor.pathOffset(bottom), bottom, base);
+    searchAround(words_[accessor.pathOffset(bottom)], accessor.pathOffset(bottom), bottom, base, 8);
     for (unsigned level = bottom + 1; level <= tree_.rootLevel(); ++level) {
       if (policy_.settled(policy_.exterior(base, level - 1))) return;
       const unsigned skip = tree_coord::octant(q[0], q[1], q[2], level);
       corner(q, level, base);
-      searchChildren(words_[accessor.pathOffset(level)], level, base, skip);
+      searchAround(words_[accessor.pathOffset(level)], accessor.pathOffset(level), level, base, skip);
     }
   }
 
@@ -83,10 +85,47 @@ class NeighbourWalk {
     out[2] = base[2] + ((o >> 2) & 1u) * size;
   }
 
+  static Distance childBound(const Distance gap[3][2], unsigned o) {
+    return gap[0][o & 1u] + gap[1][(o >> 1) & 1u] + gap[2][(o >> 2) & 1u];
+  }
+
   /** Sorts up to 8 children by their lower bounds: an insertion sort, cheapest at this size. */
   static void order(Child* c, int n) {
     for (int i = 1; i < n; ++i)
       for (int j = i; j > 0 && c[j].bound < c[j - 1].bound; --j) std::swap(c[j], c[j - 1]);
+  }
+
+  /** A node that holds the query: its children (or octants), except `skip`, nearest first, as the paper orders them. */
+  void searchAround(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3], unsigned skip) {
+    const unsigned sub = level - 1;
+    Distance gap[3][2];
+    policy_.childGaps(base, sub, gap);
+    const bool bitmap = node::isBitmap(w);
+    const std::uint32_t mask = bitmap ? node::octantMask(w, target_) : 0xFFu;
+    const std::size_t first = bitmap ? 0 : node::childBase(w);
+    Child c[8];
+    int n = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      if (o == skip || !((mask >> o) & 1u)) continue;
+      if (!bitmap) {
+        const NodeWord child = words_[first + o];
+        if (node::isBitmap(child) && node::octantMask(child, target_) == 0) continue;
+      }
+      c[n++] = Child{childBound(gap, o), o};
+    }
+    order(c, n);
+    const std::uint64_t rank = (bitmap && ranks_) ? ranks_[offset] : 0;
+    for (int i = 0; i < n; ++i) {
+      if (!policy_.worthVisiting(c[i].bound)) return;
+      std::uint32_t lo[3];
+      childCorner(base, sub, c[i].octant, lo);
+      if (bitmap) {
+        const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
+        searchRegion(lo, sub, rank + (std::uint64_t(node::popcount(before)) << (3 * sub)));
+      } else {
+        searchWord(words_[first + c[i].octant], first + c[i].octant, sub, lo);
+      }
+    }
   }
 
   /** A node word: a bitmap's target octants are uniform cubes, a reference's children are searched. */
@@ -103,14 +142,12 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
+    Distance gap[3][2];
+    policy_.childGaps(base, sub, gap);
     Child c[8];
     int n = 0;
-    for (unsigned o = 0; o < 8; ++o) {
-      if (!((mask >> o) & 1u)) continue;
-      std::uint32_t lo[3];
-      childCorner(base, sub, o, lo);
-      c[n++] = Child{policy_.lowerBound(lo, sub), o};
-    }
+    for (unsigned o = 0; o < 8; ++o)
+      if ((mask >> o) & 1u) c[n++] = Child{childBound(gap, o), o};
     order(c, n);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
@@ -125,14 +162,14 @@ class NeighbourWalk {
   void searchChildren(NodeWord w, unsigned level, const std::uint32_t base[3], unsigned skip) {
     const std::size_t first = node::childBase(w);
     const unsigned sub = level - 1;
+    Distance gap[3][2];
+    policy_.childGaps(base, sub, gap);
     Child c[8];
     int n = 0;
     for (unsigned o = 0; o < 8; ++o) {
       const NodeWord child = words_[first + o];
       if (o == skip || (node::isBitmap(child) && node::octantMask(child, target_) == 0)) continue;
-      std::uint32_t lo[3];
-      childCorner(base, sub, o, lo);
-      c[n++] = Child{policy_.lowerBound(lo, sub), o};
+      c[n++] = Child{childBound(gap, o), o};
     }
     order(c, n);
     for (int i = 0; i < n; ++i) {
@@ -154,12 +191,10 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
+    Distance gap[3][2];
+    policy_.childGaps(lo, sub, gap);
     Child c[8];
-    for (unsigned o = 0; o < 8; ++o) {
-      std::uint32_t child[3];
-      childCorner(lo, sub, o, child);
-      c[o] = Child{policy_.lowerBound(child, sub), o};
-    }
+    for (unsigned o = 0; o < 8; ++o) c[o] = Child{childBound(gap, o), o};
     order(c, 8);
     for (int i = 0; i < 8; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
