@@ -23,7 +23,7 @@ struct Hit {
 bool finite3(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
 /** PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float. */
-float pointDistance(Metric metric, const float* p, const float q[3]) {
+inline float pointDistance(Metric metric, const float* p, const float q[3]) {
   const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
   return metric == Metric::Euclidean ? dx * dx + dy * dy + dz * dz
                                      : std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
@@ -96,23 +96,21 @@ class PointIndex::Policy {
   bool wholeRegions() const { return false; }
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
 
-  /** A cell's points: a tight loop per metric that only leaves it for points within the bound. */
+  /**
+   * A cell's points. A crowded cell's points are sorted by x (see build), so the scan starts at the query's x
+   * and sweeps outwards, each way until x alone is beyond the bound: a float sum of non-negative terms is
+   * never below one of them, so nothing nearer is skipped.
+   */
   void visitCell(const std::uint32_t[3], std::uint64_t rank) {
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
-    const float* p = &index_.xyz_[3 * std::size_t(begin)];
-    if (metric_ == Metric::Euclidean) {
-      for (std::uint32_t i = begin; i < end; ++i, p += 3) {
-        const float dx = p[0] - q_[0], dy = p[1] - q_[1], dz = p[2] - q_[2];
-        const float d = dx * dx + dy * dy + dz * dz;
-        if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
-      }
-    } else {
-      for (std::uint32_t i = begin; i < end; ++i, p += 3) {
-        const float d = std::fabs(p[0] - q_[0]) + std::fabs(p[1] - q_[1]) + std::fabs(p[2] - q_[2]);
-        if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
-      }
-    }
+    if (metric_ == Metric::Euclidean)
+      scanCell<Metric::Euclidean>(begin, end);
+    else
+      scanCell<Metric::Manhattan>(begin, end);
   }
+
+  /** Cells with more points than this keep them sorted by x. */
+  static constexpr std::uint32_t kCrowded = 64;
 
   void offer(const float* p, std::int32_t index, std::uint32_t slot) {
     const Hit h{pointDistance(metric_, p, q_), index, slot};
@@ -120,6 +118,39 @@ class PointIndex::Policy {
   }
 
  private:
+  template <Metric M>
+  void scanCell(std::uint32_t begin, std::uint32_t end) {
+    const float* xyz = index_.xyz_.data();
+    if (end - begin <= kCrowded) {
+      for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
+      return;
+    }
+    std::uint32_t lo = begin, hi = end;
+    while (lo < hi) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      if (xyz[3 * std::size_t(mid)] < q_[0])
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    for (std::uint32_t i = lo; i < end && !beyond<M>(xyz[3 * std::size_t(i)]); ++i) consider<M>(xyz, i);
+    for (std::uint32_t i = lo; i > begin && !beyond<M>(xyz[3 * std::size_t(i - 1)]); --i) consider<M>(xyz, i - 1);
+  }
+
+  /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
+  template <Metric M>
+  void consider(const float* xyz, std::uint32_t i) {
+    const float d = pointDistance(M, &xyz[3 * std::size_t(i)], q_);
+    if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
+  }
+
+  /** The x difference alone already exceeds the bound. */
+  template <Metric M>
+  bool beyond(float x) const {
+    const float dx = std::fabs(x - q_[0]);
+    return double(M == Metric::Euclidean ? dx * dx : dx) > bound_;
+  }
+
   /** A point within the bound joins the k best. */
   void keep(const Hit& h) {
     if (heap_.size() < k_) {
@@ -224,7 +255,28 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     std::copy(p, p + 3, &xyz_[3 * std::size_t(at)]);
     index_[at] = ids[j];
   }
-  // Within a cell, points keep their input order: ties then resolve by index without extra work.
+  // Crowded cells keep their points sorted by x, for the sweep in Policy::visitCell.
+  std::vector<std::uint32_t> order;
+  std::vector<float> cell_xyz;
+  std::vector<std::int32_t> cell_index;
+  for (std::size_t c = 0; c < cells; ++c) {
+    const std::uint32_t begin = start_[c], end = start_[c + 1];
+    if (end - begin <= Policy::kCrowded) continue;
+    order.resize(end - begin);
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = begin + i;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return xyz_[3 * std::size_t(a)] < xyz_[3 * std::size_t(b)] ||
+             (xyz_[3 * std::size_t(a)] == xyz_[3 * std::size_t(b)] && index_[a] < index_[b]);
+    });
+    cell_xyz.clear();
+    cell_index.clear();
+    for (std::uint32_t i : order) {
+      cell_xyz.insert(cell_xyz.end(), &xyz_[3 * std::size_t(i)], &xyz_[3 * std::size_t(i)] + 3);
+      cell_index.push_back(index_[i]);
+    }
+    std::copy(cell_xyz.begin(), cell_xyz.end(), &xyz_[3 * std::size_t(begin)]);
+    std::copy(cell_index.begin(), cell_index.end(), &index_[begin]);
+  }
 }
 
 std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Metric metric,
