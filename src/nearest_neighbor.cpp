@@ -7,16 +7,13 @@ namespace pcl {
 namespace fot {
 
 /** Distances in cells between a query cell and cells or cubes, in tree coordinates. */
-class NearestCellSearch::Policy {
+class NearestCellSearch::Measure {
  public:
   using Distance = std::int64_t;
 
-  Policy(Metric metric, const Key& query, std::size_t k, std::int64_t limit, std::vector<Candidate>& heap)
+  Measure(Metric metric, const Key& query)
       : metric_(metric),
-        q_{tree_coord::fromKey(query.x), tree_coord::fromKey(query.y), tree_coord::fromKey(query.z)},
-        k_(k),
-        limit_(limit),
-        heap_(heap) {}
+        q_{tree_coord::fromKey(query.x), tree_coord::fromKey(query.y), tree_coord::fromKey(query.z)} {}
 
   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const {
     const std::int64_t half = std::int64_t(1) << child_level;
@@ -24,7 +21,8 @@ class NearestCellSearch::Policy {
       for (int h = 0; h < 2; ++h) {
         const std::int64_t first = std::int64_t(lo[a]) + h * half, last = first + half - 1;
         // Capped: no two valid keys are farther apart, and a smaller lower bound stays a lower bound.
-        const std::int64_t d = std::min<std::int64_t>(std::max<std::int64_t>({first - q_[a], q_[a] - last, 0}), kMaxGap);
+        const std::int64_t d =
+            std::min<std::int64_t>(std::max<std::int64_t>({first - q_[a], q_[a] - last, 0}), kMaxGap);
         gap[a][h] = metric_ == Metric::Manhattan ? d : d * d;
       }
   }
@@ -37,22 +35,71 @@ class NearestCellSearch::Policy {
     return metric_ == Metric::Manhattan ? nearest : nearest * nearest;
   }
 
-  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
-  bool settled(Distance exterior) const { return bound() < exterior; }
-  bool wholeRegions() const { return k_ == 1; }
-
-  /** For one nearest cell, a cube's best cell is the query clamped into it. */
-  void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t) {
-    const std::uint32_t last = std::uint32_t((std::uint64_t(1) << level) - 1);
-    const std::uint32_t cell[3] = {std::clamp(q_[0], lo[0], lo[0] + last), std::clamp(q_[1], lo[1], lo[1] + last),
-                                   std::clamp(q_[2], lo[2], lo[2] + last)};
-    visitCell(cell, 0);
-  }
-
-  void visitCell(const std::uint32_t cell[3], std::uint64_t) {
+  Candidate candidate(const std::uint32_t cell[3]) const {
     std::int64_t d[3];
     for (int a = 0; a < 3; ++a) d[a] = std::abs(std::int64_t(cell[a]) - q_[a]);
-    const Candidate c{combine(d), {cell[0], cell[1], cell[2]}};
+    return Candidate{
+        metric_ == Metric::Manhattan ? d[0] + d[1] + d[2] : d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
+        {cell[0], cell[1], cell[2]}};
+  }
+
+  /** A cube's nearest cell: the query clamped into it. */
+  void clampInto(const std::uint32_t lo[3], unsigned level, std::uint32_t cell[3]) const {
+    const std::uint32_t last = std::uint32_t((std::uint64_t(1) << level) - 1);
+    for (int a = 0; a < 3; ++a) cell[a] = std::clamp(q_[a], lo[a], lo[a] + last);
+  }
+
+ private:
+  static constexpr std::int64_t kMaxGap = (std::int64_t(1) << 30) + 1;
+
+  Metric metric_;
+  std::uint32_t q_[3];
+};
+
+/** The nearest cell: one candidate, cubes taken whole. */
+class NearestCellSearch::NearestOne : public Measure {
+ public:
+  NearestOne(Metric metric, const Key& query, std::int64_t limit) : Measure(metric, query), limit_(limit) {}
+
+  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
+  bool settled(Distance exterior) const { return bound() < exterior; }
+  bool wholeRegions() const { return true; }
+  void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t) {
+    std::uint32_t cell[3];
+    clampInto(lo, level, cell);
+    visitCell(cell, 0);
+  }
+  void visitCell(const std::uint32_t cell[3], std::uint64_t) {
+    const Candidate c = candidate(cell);
+    if (c.distance <= limit_ && (!found_ || c < best_)) {
+      best_ = c;
+      found_ = true;
+    }
+  }
+
+  bool found() const { return found_; }
+  const Candidate& best() const { return best_; }
+
+ private:
+  Distance bound() const { return found_ ? best_.distance : limit_; }
+
+  std::int64_t limit_;
+  bool found_ = false;
+  Candidate best_{};
+};
+
+/** The k nearest cells, kept in a heap, cubes split down to cells. */
+class NearestCellSearch::NearestK : public Measure {
+ public:
+  NearestK(Metric metric, const Key& query, std::size_t k, std::int64_t limit, std::vector<Candidate>& heap)
+      : Measure(metric, query), k_(k), limit_(limit), heap_(heap) {}
+
+  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
+  bool settled(Distance exterior) const { return bound() < exterior; }
+  bool wholeRegions() const { return false; }
+  void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
+  void visitCell(const std::uint32_t cell[3], std::uint64_t) {
+    const Candidate c = candidate(cell);
     if (c.distance > bound()) return;
     if (heap_.size() < k_) {
       heap_.push_back(c);
@@ -65,16 +112,9 @@ class NearestCellSearch::Policy {
   }
 
  private:
-  static constexpr std::int64_t kMaxGap = (std::int64_t(1) << 30) + 1;
-
-  Distance combine(const std::int64_t d[3]) const {
-    return metric_ == Metric::Manhattan ? d[0] + d[1] + d[2] : d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-  }
   /** The distance a new cell must not exceed: the k-th best so far, else the limit. */
   Distance bound() const { return heap_.size() < k_ ? limit_ : std::min(limit_, heap_.front().distance); }
 
-  Metric metric_;
-  std::uint32_t q_[3];
   std::size_t k_;
   std::int64_t limit_;
   std::vector<Candidate>& heap_;
@@ -86,29 +126,45 @@ NearestCellSearch::NearestCellSearch(const FastOctTree& tree, Metric metric, Cel
     throw std::invalid_argument("pcl::fot::NearestCellSearch: unknown cells are not searchable");
 }
 
+bool NearestCellSearch::nearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
+  if (!isValidKey(query)) throwKeyOutOfRange("pcl::fot::NearestCellSearch", query);
+  if (max_distance < 0) return false;
+  if (accessor_.getCell(query) == target_) {  // nothing beats distance 0
+    match = CellMatch{query, 0};
+    return true;
+  }
+  NearestOne policy(metric_, query, max_distance);
+  // Queries in spatial order have nearby answers: the previous one bounds the walk from the start.
+  if (has_previous_ && accessor_.getCell(previous_) == target_) {
+    const std::uint32_t u[3] = {tree_coord::fromKey(previous_.x), tree_coord::fromKey(previous_.y),
+                                tree_coord::fromKey(previous_.z)};
+    policy.visitCell(u, 0);
+  }
+  detail::NeighbourWalk<NearestOne>(tree_, target_, nullptr, policy).run(accessor_, query);
+  if (!policy.found()) return false;
+  const Candidate& c = policy.best();
+  match = CellMatch{Key{tree_coord::toKey(c.u[0]), tree_coord::toKey(c.u[1]), tree_coord::toKey(c.u[2])},
+                    c.distance};
+  previous_ = match.key;
+  has_previous_ = true;
+  return true;
+}
+
 void NearestCellSearch::search(const Key& query, std::size_t k, std::int64_t bound) {
   if (!isValidKey(query)) throwKeyOutOfRange("pcl::fot::NearestCellSearch", query);
   heap_.clear();
   if (k == 0 || bound < 0) return;
-  Policy policy(metric_, query, k, bound, heap_);
-  detail::NeighbourWalk<Policy>(tree_, target_, nullptr, policy).run(accessor_, query);
+  NearestK policy(metric_, query, k, bound, heap_);
+  detail::NeighbourWalk<NearestK>(tree_, target_, nullptr, policy).run(accessor_, query);
   std::sort(heap_.begin(), heap_.end());
 }
 
 std::size_t NearestCellSearch::copyMatches(std::vector<CellMatch>& matches) const {
   matches.clear();
   for (const Candidate& c : heap_)
-    matches.push_back(CellMatch{Key{tree_coord::toKey(c.u[0]), tree_coord::toKey(c.u[1]), tree_coord::toKey(c.u[2])},
-                                c.distance});
+    matches.push_back(CellMatch{
+        Key{tree_coord::toKey(c.u[0]), tree_coord::toKey(c.u[1]), tree_coord::toKey(c.u[2])}, c.distance});
   return matches.size();
-}
-
-bool NearestCellSearch::nearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
-  search(query, 1, max_distance);
-  if (heap_.empty()) return false;
-  const Candidate& c = heap_.front();
-  match = CellMatch{Key{tree_coord::toKey(c.u[0]), tree_coord::toKey(c.u[1]), tree_coord::toKey(c.u[2])}, c.distance};
-  return true;
 }
 
 std::size_t NearestCellSearch::nearestK(const Key& query, std::size_t k, std::vector<CellMatch>& matches,
@@ -117,7 +173,8 @@ std::size_t NearestCellSearch::nearestK(const Key& query, std::size_t k, std::ve
   return copyMatches(matches);
 }
 
-std::size_t NearestCellSearch::radius(const Key& query, std::int64_t radius, std::vector<CellMatch>& matches) {
+std::size_t NearestCellSearch::radius(const Key& query, std::int64_t radius,
+                                      std::vector<CellMatch>& matches) {
   search(query, std::numeric_limits<std::size_t>::max(), radius);
   return copyMatches(matches);
 }

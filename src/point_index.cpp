@@ -17,10 +17,14 @@ struct Hit {
   float distance;
   std::int32_t index;
   std::uint32_t slot;  // where the point sits in the table
-  bool operator<(const Hit& o) const { return distance < o.distance || (distance == o.distance && index < o.index); }
+  bool operator<(const Hit& o) const {
+    return distance < o.distance || (distance == o.distance && index < o.index);
+  }
 };
 
-bool finite3(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+bool finite3(const float* p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
 
 /** PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float. */
 inline float pointDistance(Metric metric, const float* p, const float q[3]) {
@@ -43,10 +47,12 @@ std::uint64_t assignRanks(const FastOctTree& tree, NodeWord w, std::size_t offse
                           std::uint64_t next, std::vector<std::uint64_t>& ranks) {
   if (node::isBitmap(w)) {
     ranks[offset] = next;
-    return next + (std::uint64_t(node::popcount(node::octantMask(w, CellState::Occupied))) << (3 * (level - 1)));
+    return next +
+           (std::uint64_t(node::popcount(node::octantMask(w, CellState::Occupied))) << (3 * (level - 1)));
   }
   const std::size_t first = node::childBase(w);
-  for (unsigned o = 0; o < 8; ++o) next = assignRanks(tree, tree.words()[first + o], first + o, level - 1, next, ranks);
+  for (unsigned o = 0; o < 8; ++o)
+    next = assignRanks(tree, tree.words()[first + o], first + o, level - 1, next, ranks);
   return next;
 }
 
@@ -60,11 +66,18 @@ class PointIndex::Policy {
  public:
   using Distance = double;
 
-  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into metres. */
-  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k, double limit,
-         std::vector<Hit>& heap)
-      : index_(index), q_{q[0], q[1], q[2]}, qc_{qc[0], qc[1], qc[2]}, metric_(metric), k_(k), limit_(limit),
-        bound_(limit), heap_(heap) {
+  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into
+   * metres. */
+  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k,
+         double limit, std::vector<Hit>& heap)
+      : index_(index),
+        q_{q[0], q[1], q[2]},
+        qc_{qc[0], qc[1], qc[2]},
+        metric_(metric),
+        k_(k),
+        limit_(limit),
+        bound_(limit),
+        heap_(heap) {
     const double res = index.tree_.getGrid().resolution();
     scale_ = metric == Metric::Euclidean ? res * res : res;
   }
@@ -74,7 +87,8 @@ class PointIndex::Policy {
     const double half = double(std::uint64_t(1) << child_level);
     for (int a = 0; a < 3; ++a) {
       const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
-      const double below = std::max({low - qc_[a], qc_[a] - mid, 0.0}), above = std::max({mid - qc_[a], qc_[a] - high, 0.0});
+      const double below = std::max({low - qc_[a], qc_[a] - mid, 0.0}),
+                   above = std::max({mid - qc_[a], qc_[a] - high, 0.0});
       gap[a][0] = shade((metric_ == Metric::Euclidean ? below * below : below) * scale_);
       gap[a][1] = shade((metric_ == Metric::Euclidean ? above * above : above) * scale_);
     }
@@ -134,7 +148,8 @@ class PointIndex::Policy {
         hi = mid;
     }
     for (std::uint32_t i = lo; i < end && !beyond<M>(xyz[3 * std::size_t(i)]); ++i) consider<M>(xyz, i);
-    for (std::uint32_t i = lo; i > begin && !beyond<M>(xyz[3 * std::size_t(i - 1)]); --i) consider<M>(xyz, i - 1);
+    for (std::uint32_t i = lo; i > begin && !beyond<M>(xyz[3 * std::size_t(i - 1)]); --i)
+      consider<M>(xyz, i - 1);
   }
 
   /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
@@ -181,8 +196,8 @@ class PointIndex::Policy {
 
 PointIndex::PointIndex(double resolution) : resolution_(resolution), tree_(resolution) {}
 
-void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_bytes, const std::int32_t* subset,
-                       std::size_t subset_size) {
+void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                       const std::int32_t* subset, std::size_t subset_size) {
   const char* bytes = reinterpret_cast<const char*>(xyz);
   auto point = [&](std::size_t i) { return reinterpret_cast<const float*>(bytes + i * stride_bytes); };
   const std::size_t n = subset ? subset_size : count;
@@ -196,7 +211,9 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   for (std::size_t j = 0; j < n; ++j) {
     const std::int64_t i = source(j);
     if (i < 0) continue;
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], double(point(std::size_t(i))[a])), hi[a] = std::max(hi[a], double(point(std::size_t(i))[a]));
+    for (int a = 0; a < 3; ++a)
+      lo[a] = std::min(lo[a], double(point(std::size_t(i))[a])),
+      hi[a] = std::max(hi[a], double(point(std::size_t(i))[a]));
   }
   double origin[3] = {0, 0, 0};
   if (lo[0] <= hi[0])
@@ -238,7 +255,8 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     const std::size_t offset = reader.pathOffset(level);
     const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z)};
     const unsigned o = tree_coord::octant(u[0], u[1], u[2], level);
-    const std::uint32_t before = node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
+    const std::uint32_t before =
+        node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
     const std::uint32_t inner = std::uint32_t((std::uint64_t(1) << (level - 1)) - 1);
     rank_of[j] = std::uint32_t(ranks_[offset] + (std::uint64_t(node::popcount(before)) << (3 * (level - 1))) +
                                mortonWithin(u[0] & inner, u[1] & inner, u[2] & inner, level - 1));
@@ -314,9 +332,12 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   Policy policy(*this, q, qc, metric, k, bound, heap);
   // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
   // a point twice is harmless for one neighbour (the repeat does not beat itself).
-  if (k == 1 && last_slot != kNoSlot) policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
-  if (!index_.empty()) detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
-  for (std::size_t i = 0; i < outliers_index_.size(); ++i) policy.offer(&outliers_xyz_[3 * i], outliers_index_[i], kNoSlot);
+  if (k == 1 && last_slot != kNoSlot)
+    policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
+  if (!index_.empty())
+    detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
+  for (std::size_t i = 0; i < outliers_index_.size(); ++i)
+    policy.offer(&outliers_xyz_[3 * i], outliers_index_[i], kNoSlot);
 
   std::sort(heap.begin(), heap.end());
   if (k == 1 && !heap.empty()) last_slot = heap.front().slot;
@@ -329,8 +350,8 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   return heap.size();
 }
 
-std::size_t PointIndex::nearestK(const float q[3], std::size_t k, Metric metric, std::vector<std::int32_t>& indices,
-                                 std::vector<float>& distances) const {
+std::size_t PointIndex::nearestK(const float q[3], std::size_t k, Metric metric,
+                                 std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
   return search(q, k, std::numeric_limits<double>::infinity(), metric, indices, distances);
 }
 
@@ -343,8 +364,8 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
     return 0;
   }
   const double limit = metric == Metric::Euclidean ? radius * radius : radius;
-  return search(q, max_results ? max_results : std::numeric_limits<std::size_t>::max(), limit, metric, indices,
-                distances);
+  return search(q, max_results ? max_results : std::numeric_limits<std::size_t>::max(), limit, metric,
+                indices, distances);
 }
 
 std::size_t PointIndex::getMemoryBytes() const {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <random>
 
-#include <flann/flann.hpp>
 #include <pcl/common/point_tests.h>
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/search/brute_force.h>
+#include <flann/flann.hpp>
 
 #include <pcl_fot/search/fast_oct_tree_search.h>
 
@@ -29,7 +29,7 @@ class FlannL1 {
         ids_.push_back(int(i));
       }
     index_.reset(new flann::Index<flann::L1<float>>(flann::Matrix<float>(data_.data(), ids_.size(), 3),
-                                                     flann::KDTreeSingleIndexParams(15)));
+                                                    flann::KDTreeSingleIndexParams(15)));
     index_->buildIndex();
   }
   float nearest(const PointXYZ& q) const {

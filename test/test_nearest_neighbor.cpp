@@ -77,18 +77,22 @@ TEST(NearestCellSearch, RandomClustersWithCollapsedCubes) {
   std::mt19937 rng(41);
   // Scattered cells, plus full cubes that collapse into single words.
   for (int i = 0; i < 3000; ++i)
-    tree.setCell({std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 100) - 50},
-                 (rng() % 4) ? CellState::Occupied : CellState::Free);
+    tree.setCell(
+        {std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 400) - 200, std::int32_t(rng() % 100) - 50},
+        (rng() % 4) ? CellState::Occupied : CellState::Free);
   for (int c = 0; c < 20; ++c) {
-    const Key base{std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 60) - 30};
+    const Key base{std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 300) - 150,
+                   std::int32_t(rng() % 60) - 30};
     const int side = 2 << (rng() % 3);
     for (int z = 0; z < side; ++z)
       for (int y = 0; y < side; ++y)
-        for (int x = 0; x < side; ++x) tree.setCell({base.x + x, base.y + y, base.z + z}, CellState::Occupied);
+        for (int x = 0; x < side; ++x)
+          tree.setCell({base.x + x, base.y + y, base.z + z}, CellState::Occupied);
   }
   std::vector<Key> queries;
   for (int i = 0; i < 300; ++i)
-    queries.push_back({std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 200) - 100});
+    queries.push_back(
+        {std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 600) - 300, std::int32_t(rng() % 200) - 100});
   queries.push_back({kMaxKey, kMinKey, 0});  // far outside the map
   checkQueries(tree, CellState::Occupied, queries);
   checkQueries(tree, CellState::Free, queries);
@@ -121,7 +125,8 @@ TEST(NearestCellSearch, EdgeCases) {
   one.setCell({kMaxKey, kMaxKey, kMaxKey}, CellState::Occupied);
   NearestCellSearch far(one);
   ASSERT_TRUE(far.nearest({kMinKey, kMinKey, kMinKey}, m));
-  EXPECT_EQ(m.distance, 3 * (std::int64_t(kMaxKey) - kMinKey)) << "distances across the whole key range are exact";
+  EXPECT_EQ(m.distance, 3 * (std::int64_t(kMaxKey) - kMinKey))
+      << "distances across the whole key range are exact";
   NearestCellSearch far_l2(one, Metric::Euclidean);
   ASSERT_TRUE(far_l2.nearest({kMinKey, kMinKey, kMinKey}, m));
   EXPECT_EQ(m.distance, 3 * (std::int64_t(kMaxKey) - kMinKey) * (std::int64_t(kMaxKey) - kMinKey));

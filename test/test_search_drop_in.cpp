@@ -38,7 +38,8 @@ TEST(SearchDropIn, IcpRecoversAKnownTransform) {
   ASSERT_TRUE(icp.hasConverged());
   const Eigen::Matrix4f error = icp.getFinalTransformation() * truth.inverse().matrix();
   EXPECT_LT((error.block<3, 1>(0, 3)).norm(), 0.01) << "translation recovered within 1 cm";
-  EXPECT_LT(Eigen::AngleAxisf(Eigen::Matrix3f(error.block<3, 3>(0, 0))).angle(), 0.002) << "rotation within 0.1°";
+  EXPECT_LT(Eigen::AngleAxisf(Eigen::Matrix3f(error.block<3, 3>(0, 0))).angle(), 0.002)
+      << "rotation within 0.1°";
   EXPECT_LT(icp.getFitnessScore(), 1e-4);
 }
 
@@ -65,7 +66,8 @@ TEST(SearchDropIn, NormalEstimationGivesTheSameNormals) {
     if (!pcl::isFinite((*cloud)[i])) continue;
     kdtree->nearestKSearch((*cloud)[i], k, a, da);
     ours->nearestKSearch((*cloud)[i], k + 1, b, db);
-    ASSERT_EQ(da, std::vector<float>(db.begin(), db.begin() + k)) << "the same neighbour distances, point " << i;
+    ASSERT_EQ(da, std::vector<float>(db.begin(), db.begin() + k))
+        << "the same neighbour distances, point " << i;
     ambiguous_k[i] = db.size() > std::size_t(k) && db[k - 1] == db[k];
     ours->radiusSearch((*cloud)[i], radius, b, db);
     // KdTreeFLANN keeps d < float(r²); BruteForce and we keep d <= r² in double.

@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
           "sample at 0.30 m around its own centre, so that each fits the paper's 1024³ grid.\n\n";
     md << fot_bench::benchCellAccess(scans, repeats) << "\n";
     md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
+    md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
   } catch (const std::exception& e) {

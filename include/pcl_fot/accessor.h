@@ -97,8 +97,9 @@ class BasicAccessor {
    * level from the returned one up to the root. Search algorithms walk back up this path.
    */
   unsigned locatePath(const Key& key) {
-    return locate(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y), tree_coord::fromKey(key.z)) ? bottom_
-                                                                                                        : 0u;
+    return locate(tree_coord::fromKey(key.x), tree_coord::fromKey(key.y), tree_coord::fromKey(key.z))
+               ? bottom_
+               : 0u;
   }
   std::size_t pathOffset(unsigned level) const { return path_[level]; }
 

@@ -27,11 +27,11 @@ namespace detail {
  * The Policy knows the query and the metric and keeps the result:
  *   using Distance;
  *   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const;
- *       // for the cube at `lo` with children of child_level: per axis, the query's distance to the lower (0) and
- *       // upper (1) half, in the metric's units (squared for Euclidean). A child's lower bound sums its halves'.
- *   Distance exterior(const std::uint32_t lo[3], unsigned level) const;  // the query's cube: nothing outside is nearer
- *   bool worthVisiting(Distance lower_bound) const;
- *   bool settled(Distance exterior) const;
+ *       // for the cube at `lo` with children of child_level: per axis, the query's distance to the lower (0)
+ * and
+ *       // upper (1) half, in the metric's units (squared for Euclidean). A child's lower bound sums its
+ * halves'. Distance exterior(const std::uint32_t lo[3], unsigned level) const;  // the query's cube: nothing
+ * outside is nearer bool worthVisiting(Distance lower_bound) const; bool settled(Distance exterior) const;
  *   bool wholeRegions() const;  // visit uniform cubes whole rather than cell by cell
  *   void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t rank);
  *   void visitCell(const std::uint32_t cell[3], std::uint64_t rank);
@@ -78,7 +78,8 @@ class NeighbourWalk {
     out[0] = q[0] & mask, out[1] = q[1] & mask, out[2] = q[2] & mask;
   }
 
-  static void childCorner(const std::uint32_t base[3], unsigned child_level, unsigned o, std::uint32_t out[3]) {
+  static void childCorner(const std::uint32_t base[3], unsigned child_level, unsigned o,
+                          std::uint32_t out[3]) {
     const std::uint32_t size = std::uint32_t(1) << child_level;
     out[0] = base[0] + (o & 1u) * size;
     out[1] = base[1] + ((o >> 1) & 1u) * size;
@@ -95,12 +96,18 @@ class NeighbourWalk {
       for (int j = i; j > 0 && c[j].bound < c[j - 1].bound; --j) std::swap(c[j], c[j - 1]);
   }
 
-  /** A node that holds the query: its children (or octants), except `skip`, nearest first, as the paper orders them. */
-  void searchAround(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3], unsigned skip) {
+  /** A node that holds the query: its children (or octants), except `skip`, nearest first, as the paper
+   * orders them. */
+  void searchAround(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3],
+                    unsigned skip) {
+    const bool bitmap = node::isBitmap(w);
+    if (bitmap && policy_.wholeRegions()) {
+      visitOctants(node::octantMask(w, target_) & ~(skip < 8 ? 1u << skip : 0u), level, base);
+      return;
+    }
     const unsigned sub = level - 1;
     Distance gap[3][2];
     policy_.childGaps(base, sub, gap);
-    const bool bitmap = node::isBitmap(w);
     const std::uint32_t mask = bitmap ? node::octantMask(w, target_) : 0xFFu;
     const std::size_t first = bitmap ? 0 : node::childBase(w);
     Child c[8];
@@ -128,6 +135,20 @@ class NeighbourWalk {
     }
   }
 
+  /** A policy that takes cubes whole finds each octant's best cell exactly: no bounds, no order needed. */
+  void visitOctants(std::uint32_t mask, unsigned level, const std::uint32_t base[3]) {
+    const unsigned sub = level - 1;
+    for (unsigned o = 0; o < 8; ++o) {
+      if (!((mask >> o) & 1u)) continue;
+      std::uint32_t lo[3];
+      childCorner(base, sub, o, lo);
+      if (sub == 0)
+        policy_.visitCell(lo, 0);
+      else
+        policy_.visitRegion(lo, sub, 0);
+    }
+  }
+
   /** A node word: a bitmap's target octants are uniform cubes, a reference's children are searched. */
   void searchWord(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3]) {
     if (!node::isBitmap(w)) {
@@ -139,6 +160,10 @@ class NeighbourWalk {
     const std::uint64_t rank = ranks_ ? ranks_[offset] : 0;
     if (mask == 0xFFu) {  // one uniform cube of target cells
       searchRegion(base, level, rank);
+      return;
+    }
+    if (policy_.wholeRegions()) {
+      visitOctants(mask, level, base);
       return;
     }
     const unsigned sub = level - 1;
@@ -257,7 +282,9 @@ class NearestCellSearch {
       return u[2] < o.u[2];
     }
   };
-  class Policy;
+  class Measure;
+  class NearestOne;
+  class NearestK;
 
   /** Fills heap_ with the best candidates, sorted; reuses its storage from query to query. */
   void search(const Key& query, std::size_t k, std::int64_t bound);
@@ -268,6 +295,8 @@ class NearestCellSearch {
   CellState target_;
   ConstAccessor accessor_;
   std::vector<Candidate> heap_;
+  Key previous_;  // the last nearest cell: the next query's first candidate
+  bool has_previous_ = false;
 };
 
 }  // namespace fot

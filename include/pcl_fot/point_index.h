@@ -29,8 +29,8 @@ class PointIndex {
    * Indexes the points at `xyz` (point i's x, y, z at byte offset i * stride_bytes), or only those whose
    * indices `subset` lists. Points that are not finite are left out.
    */
-  void build(const float* xyz, std::size_t count, std::size_t stride_bytes, const std::int32_t* subset = nullptr,
-             std::size_t subset_size = 0);
+  void build(const float* xyz, std::size_t count, std::size_t stride_bytes,
+             const std::int32_t* subset = nullptr, std::size_t subset_size = 0);
 
   /** Points indexed. */
   std::size_t size() const { return index_.size(); }
@@ -55,17 +55,17 @@ class PointIndex {
 
  private:
   class Policy;
-  std::size_t search(const float q[3], std::size_t k, double bound, Metric metric, std::vector<std::int32_t>& indices,
-                     std::vector<float>& distances) const;
+  std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
+                     std::vector<std::int32_t>& indices, std::vector<float>& distances) const;
 
   double resolution_;
   FastOctTree tree_;
-  std::uint64_t build_id_ = 0;          // tells each thread's cached path which build it belongs to
-  std::vector<std::uint64_t> ranks_;    // per pool word: rank of the first occupied cell under a bitmap word
-  std::vector<std::uint32_t> start_;    // cell rank -> first of its points in xyz_ / index_
-  std::vector<float> xyz_;              // the points, grouped by cell
-  std::vector<std::int32_t> index_;     // their indices as given to build
-  std::vector<float> outliers_xyz_;     // finite points beyond the key range: searched exhaustively
+  std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to
+  std::vector<std::uint64_t> ranks_;  // per pool word: rank of the first occupied cell under a bitmap word
+  std::vector<std::uint32_t> start_;  // cell rank -> first of its points in xyz_ / index_
+  std::vector<float> xyz_;            // the points, grouped by cell
+  std::vector<std::int32_t> index_;   // their indices as given to build
+  std::vector<float> outliers_xyz_;   // finite points beyond the key range: searched exhaustively
   std::vector<std::int32_t> outliers_index_;
 };
 

@@ -35,10 +35,10 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   using Base = pcl::search::KdTree<PointT>;
   using Ptr = shared_ptr<FastOctTreeSearch<PointT>>;
   using ConstPtr = shared_ptr<const FastOctTreeSearch<PointT>>;
-  using typename Base::PointCloud;
-  using typename Base::PointCloudConstPtr;
   using Base::nearestKSearch;
   using Base::radiusSearch;
+  using typename Base::PointCloud;
+  using typename Base::PointCloudConstPtr;
 
   /** `resolution`: the cell edge in metres; a handful of points per cell searches fastest. */
   explicit FastOctTreeSearch(double resolution = 0.01, bool sorted = true);
@@ -50,14 +50,23 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
 #endif
   setInputCloud(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices = IndicesConstPtr()) override;
 
-  int nearestKSearch(const PointT& point, int k, Indices& k_indices, std::vector<float>& k_sqr_distances) const override;
-  int radiusSearch(const PointT& point, double radius, Indices& k_indices, std::vector<float>& k_sqr_distances,
-                   unsigned int max_nn = 0) const override;
+  int nearestKSearch(const PointT& point, int k, Indices& k_indices,
+                     std::vector<float>& k_sqr_distances) const override;
+  int radiusSearch(const PointT& point, double radius, Indices& k_indices,
+                   std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override;
 
-  void setMetric(Metric metric) { metric_ = metric; }
-  Metric getMetric() const { return metric_; }
-  double getResolution() const { return index_.resolution(); }
-  const PointIndex& getPointIndex() const { return index_; }
+  void setMetric(Metric metric) {
+    metric_ = metric;
+  }
+  Metric getMetric() const {
+    return metric_;
+  }
+  double getResolution() const {
+    return index_.resolution();
+  }
+  const PointIndex& getPointIndex() const {
+    return index_;
+  }
 
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 

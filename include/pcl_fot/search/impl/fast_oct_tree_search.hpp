@@ -11,13 +11,14 @@ namespace fot {
 namespace search {
 
 template <typename PointT>
-FastOctTreeSearch<PointT>::FastOctTreeSearch(double resolution, bool sorted) : Base(sorted), index_(resolution) {
+FastOctTreeSearch<PointT>::FastOctTreeSearch(double resolution, bool sorted)
+    : Base(sorted), index_(resolution) {
   this->name_ = "FastOctTreeSearch";
 }
 
 template <typename PointT>
-typename FastOctTreeSearch<PointT>::Source FastOctTreeSearch<PointT>::describe(const PointCloudConstPtr& cloud,
-                                                                               const IndicesConstPtr& indices) const {
+typename FastOctTreeSearch<PointT>::Source FastOctTreeSearch<PointT>::describe(
+    const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const {
   Source s{cloud.get(), indices.get(), cloud ? cloud->size() : 0, 0};
   if (!cloud) return s;
   // FNV-1a over the coordinates and the subset: a cloud changed in place is seen as new.
@@ -81,4 +82,5 @@ int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, 
 }  // namespace fot
 }  // namespace pcl
 
-#define PCL_INSTANTIATE_FastOctTreeSearch(T) template class PCL_EXPORTS pcl::fot::search::FastOctTreeSearch<T>;
+#define PCL_INSTANTIATE_FastOctTreeSearch(T) \
+  template class PCL_EXPORTS pcl::fot::search::FastOctTreeSearch<T>;

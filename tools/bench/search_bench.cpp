@@ -1,0 +1,278 @@
+// Nearest-neighbour search: build plus 1-NN of every point of one scan into another, side by side.
+#include "sections.h"
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+
+#include <pcl/common/point_tests.h>
+#include <pcl/common/transforms.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/search/octree.h>
+#include <flann/flann.hpp>
+#include <nanoflann.hpp>
+
+#include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+#include "bench_util.h"
+
+namespace fot_bench {
+namespace {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+/** nanoflann's dataset adaptor over packed xyz floats. */
+struct Points {
+  std::vector<float> xyz;
+  std::size_t kdtree_get_point_count() const { return xyz.size() / 3; }
+  float kdtree_get_pt(std::size_t i, std::size_t d) const { return xyz[3 * i + d]; }
+  template <typename Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+template <typename Distance>
+using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<Distance, Points, 3, unsigned>;
+
+/** One contender: builds from the target, then answers one query, adding its distance to `sum`. */
+struct Method {
+  std::string name;
+  std::function<void()> build;
+  std::function<void(const pcl::PointXYZ&, double& sum)> query;
+};
+
+struct Result {
+  double build_ms, query_ms, sum;
+};
+
+Result measure(Method& m, const std::vector<pcl::PointXYZ>& queries, int repeats) {
+  std::vector<double> b, q;
+  double sum = 0;
+  for (int r = 0; r < repeats; ++r) {
+    scrubCaches();
+    b.push_back(timeOnce(m.build) * 1e3);
+    sum = 0;
+    q.push_back(timeOnce([&] {
+                  for (const auto& p : queries) m.query(p, sum);
+                }) *
+                1e3);
+  }
+  return {median(b), median(q), sum};
+}
+
+std::string pointLevel(const BenchScan& target, const BenchScan& source, double res, int repeats,
+                       std::vector<std::string>& verdicts) {
+  const Cloud::Ptr cloud = target.cloud;
+  std::vector<pcl::PointXYZ> queries;
+  for (const auto& p : *source.cloud)
+    if (pcl::isFinite(p)) queries.push_back(p);
+  Points finite;
+  for (const auto& p : *cloud)
+    if (pcl::isFinite(p)) finite.xyz.insert(finite.xyz.end(), {p.x, p.y, p.z});
+
+  pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ> fot_l2(res), fot_l1(res);
+  fot_l1.setMetric(pcl::fot::Metric::Manhattan);
+  pcl::KdTreeFLANN<pcl::PointXYZ> flann_l2;
+  std::unique_ptr<flann::Index<flann::L1<float>>> flann_l1;
+  std::unique_ptr<NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>> nano_l2;
+  std::unique_ptr<NanoTree<nanoflann::L1_Adaptor<float, Points>>> nano_l1;
+  pcl::search::Octree<pcl::PointXYZ> pcl_octree(res);
+  pcl::Indices idx;
+  std::vector<float> dist;
+  std::vector<Method> methods = {
+      {"FOT search, Euclidean", [&] { fot_l2.setInputCloud(Cloud::ConstPtr(new Cloud(*cloud))); },
+       [&](const pcl::PointXYZ& p, double& s) {
+         fot_l2.nearestKSearch(p, 1, idx, dist);
+         s += dist[0];
+       }},
+      {"FOT search, Manhattan", [&] { fot_l1.setInputCloud(Cloud::ConstPtr(new Cloud(*cloud))); },
+       [&](const pcl::PointXYZ& p, double& s) {
+         fot_l1.nearestKSearch(p, 1, idx, dist);
+         s += dist[0];
+       }},
+      {"pcl::KdTreeFLANN (L2)", [&] { flann_l2.setInputCloud(cloud); },
+       [&](const pcl::PointXYZ& p, double& s) {
+         flann_l2.nearestKSearch(p, 1, idx, dist);
+         s += dist[0];
+       }},
+      {"flann::Index L1",
+       [&] {
+         flann_l1.reset(new flann::Index<flann::L1<float>>(
+             flann::Matrix<float>(finite.xyz.data(), finite.kdtree_get_point_count(), 3),
+             flann::KDTreeSingleIndexParams(15)));
+         flann_l1->buildIndex();
+       },
+       [&](const pcl::PointXYZ& p, double& s) {
+         float q[3] = {p.x, p.y, p.z}, d;
+         int i;
+         flann::Matrix<int> mi(&i, 1, 1);
+         flann::Matrix<float> md(&d, 1, 1);
+         flann_l1->knnSearch(flann::Matrix<float>(q, 1, 3), mi, md, 1, flann::SearchParams(-1, 0.0f));
+         s += d;
+       }},
+      {"nanoflann L2",
+       [&] {
+         nano_l2.reset(new NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>(
+             3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(10)));
+         nano_l2->buildIndex();
+       },
+       [&](const pcl::PointXYZ& p, double& s) {
+         const float q[3] = {p.x, p.y, p.z};
+         unsigned i;
+         float d;
+         nano_l2->knnSearch(q, 1, &i, &d);
+         s += d;
+       }},
+      {"nanoflann L1",
+       [&] {
+         nano_l1.reset(new NanoTree<nanoflann::L1_Adaptor<float, Points>>(
+             3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(10)));
+         nano_l1->buildIndex();
+       },
+       [&](const pcl::PointXYZ& p, double& s) {
+         const float q[3] = {p.x, p.y, p.z};
+         unsigned i;
+         float d;
+         nano_l1->knnSearch(q, 1, &i, &d);
+         s += d;
+       }},
+      {"pcl::search::Octree", [&] { pcl_octree.setInputCloud(cloud); },
+       [&](const pcl::PointXYZ& p, double& s) {
+         pcl_octree.nearestKSearch(p, 1, idx, dist);
+         s += dist[0];
+       }},
+  };
+  std::vector<Result> results;
+  for (Method& m : methods) {
+    std::fprintf(stderr, "  search: %s into %s: %s\n", source.name.c_str(), target.name.c_str(),
+                 m.name.c_str());
+    results.push_back(measure(m, queries, repeats));
+  }
+  const double fot_l2_total = results[0].build_ms + results[0].query_ms;
+  const double fot_l1_total = results[1].build_ms + results[1].query_ms;
+  Table t(
+      {"method", "build ms", "query ms", "total ms", "ns / query", "total / FOT total", "sum of distances"});
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    const Result& r = results[i];
+    const bool l1 = methods[i].name.find("L1") != std::string::npos ||
+                    methods[i].name.find("Manhattan") != std::string::npos;
+    const double total = r.build_ms + r.query_ms;
+    t.add({methods[i].name, format("%.1f", r.build_ms), format("%.1f", r.query_ms), format("%.1f", total),
+           format("%.0f", r.query_ms * 1e6 / double(queries.size())),
+           format("%.2f", total / (l1 ? fot_l1_total : fot_l2_total)), format("%.6f", r.sum)});
+  }
+  const double flann = results[2].build_ms + results[2].query_ms,
+               nano = results[4].build_ms + results[4].query_ms,
+               octree = results[6].build_ms + results[6].query_ms;
+  verdicts.push_back(
+      format("%s into %s: FOT Euclidean is **%.2f×** faster than pcl::KdTreeFLANN (target 2×), "
+             "**%.2f×** nanoflann L2's time (target ≤ 1.5×), **%.1f×** faster than pcl::search::Octree "
+             "(target 20×).",
+             source.name.c_str(), target.name.c_str(), flann / fot_l2_total, fot_l2_total / nano,
+             octree / fot_l2_total));
+  std::string out = format("**%s into %s**, %zu queries, cells of %.2f m:\n\n", source.name.c_str(),
+                           target.name.c_str(), queries.size(), res);
+  return out + t.markdown() + "\n";
+}
+
+/** The paper's voxel-level search: nearest occupied cell in the Manhattan metric, against nanoflann L1. */
+std::string voxelLevel(const BenchScan& target, const BenchScan& source, double res, int repeats,
+                       std::vector<std::string>& verdicts) {
+  const pcl::fot::VoxelGrid grid(res);
+  pcl::fot::FastOctTree target_map(grid), source_map(grid);
+  pcl::fot::insertPointCloud(target_map, *target.cloud);
+  pcl::fot::insertPointCloud(source_map, *source.cloud);
+  std::vector<pcl::fot::Key> targets, queries;
+  target_map.forEachCell(pcl::fot::CellState::Occupied,
+                         [&](const pcl::fot::Key& k) { targets.push_back(k); });
+  source_map.forEachCell(pcl::fot::CellState::Occupied,
+                         [&](const pcl::fot::Key& k) { queries.push_back(k); });
+  Points centres;
+  for (const auto& k : targets) centres.xyz.insert(centres.xyz.end(), {float(k.x), float(k.y), float(k.z)});
+
+  std::vector<double> t_fot, t_nano;
+  std::int64_t sum_fot = 0;
+  double sum_nano = 0;
+  for (int r = 0; r < repeats; ++r) {
+    scrubCaches();
+    t_fot.push_back(timeOnce([&] {
+      pcl::fot::FastOctTree tree(grid);
+      tree.insertKeys(targets.data(), targets.size());
+      pcl::fot::NearestCellSearch search(tree, pcl::fot::Metric::Manhattan);
+      pcl::fot::CellMatch m;
+      sum_fot = 0;
+      for (const auto& q : queries) {
+        search.nearest(q, m);
+        sum_fot += m.distance;
+      }
+    }));
+    scrubCaches();
+    t_nano.push_back(timeOnce([&] {
+      NanoTree<nanoflann::L1_Adaptor<float, Points>> tree(3, centres,
+                                                          nanoflann::KDTreeSingleIndexAdaptorParams(10));
+      tree.buildIndex();
+      sum_nano = 0;
+      for (const auto& q : queries) {
+        const float p[3] = {float(q.x), float(q.y), float(q.z)};
+        unsigned i;
+        float d;
+        tree.knnSearch(p, 1, &i, &d);
+        sum_nano += d;
+      }
+    }));
+  }
+  const double fot = median(t_fot) * 1e3, nano = median(t_nano) * 1e3;
+  verdicts.push_back(
+      format("Voxel level, %s into %s: the Manhattan nearest-tree-neighbour search is **%.2f×** "
+             "faster than nanoflann L1 on the same voxel centres (target: faster).",
+             source.name.c_str(), target.name.c_str(), nano / fot));
+  Table t({"method", "target cells", "queries", "build + query ms", "sum of L1 distances"});
+  t.add({"FOT NearestCellSearch (Manhattan)", format("%zu", targets.size()), format("%zu", queries.size()),
+         format("%.1f", fot), format("%lld", (long long)sum_fot)});
+  t.add({"nanoflann L1 on voxel centres", format("%zu", targets.size()), format("%zu", queries.size()),
+         format("%.1f", nano), format("%.0f", sum_nano)});
+  return format("**Voxel level, %s into %s**, cells of %.2f m:\n\n", source.name.c_str(), target.name.c_str(),
+                res) +
+         t.markdown() + "\n";
+}
+
+const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& name) {
+  for (const auto& s : scans)
+    if (s.name == name) return s;
+  throw std::runtime_error("missing scan " + name);
+}
+
+}  // namespace
+
+std::string benchSearch(const std::vector<BenchScan>& scans, int repeats) {
+  std::vector<std::string> verdicts;
+  std::string body;
+  body += pointLevel(find(scans, "kinect_capture0001"), find(scans, "kinect_capture0002"), 0.03, repeats,
+                     verdicts);
+  body += pointLevel(find(scans, "room_scan1"), find(scans, "room_scan2"), 0.1, repeats, verdicts);
+  body += voxelLevel(find(scans, "kinect_capture0001"), find(scans, "kinect_capture0002"), 0.01, repeats,
+                     verdicts);
+  body += voxelLevel(find(scans, "room_scan1"), find(scans, "room_scan2"), 0.05, repeats, verdicts);
+
+  std::string out = "## Nearest-neighbour search (paper §IV)\n\n";
+  out += format(
+      "1-NN of every finite point of one scan into another, each in its own frame, as a PCL user would query "
+      "them. Times are medians of %d rounds, building from the target and then querying; caches are scrubbed "
+      "before each. The sums of distances show that every method found the same nearest distances (FOT and "
+      "FLANN bit for bit; nanoflann and pcl::search::Octree sum their float distances in another order, so "
+      "their "
+      "sums may differ in the last digits). FOT search is `pcl::fot::search::FastOctTreeSearch`; its cell "
+      "size "
+      "is given per table, and pcl::search::Octree gets the same.\n\n",
+      repeats);
+  out += body;
+  out += "Summary:\n\n";
+  for (const auto& v : verdicts) out += "- " + v + "\n";
+  return out;
+}
+
+}  // namespace fot_bench
