@@ -1,0 +1,124 @@
+#include <pcl_fot/psi.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include <pcl_fot/accessor.h>
+#include <pcl_fot/nearest_neighbor.h>
+
+namespace pcl {
+namespace fot {
+namespace {
+
+std::uint64_t cellCount(const FastOctTree& t, CellState v) {
+  return v == CellState::Occupied ? t.getOccupiedCount() : t.getFreeCount();
+}
+
+/** Sums a's cells' distances to b's cells of one value, for a run of a's regions. */
+class DirectedSum {
+ public:
+  DirectedSum(const FastOctTree& b, CellState v, std::int64_t cap)
+      : v_(v), cap_(cap), search_(b, Metric::Manhattan, v), b_cells_(b) {}
+
+  std::uint64_t regions(const Region* first, const Region* last) {
+    std::uint64_t sum = 0;
+    for (const Region* r = first; r != last; ++r)
+      sum += cube(tree_coord::fromKey(r->min_key.x), tree_coord::fromKey(r->min_key.y),
+                  tree_coord::fromKey(r->min_key.z), r->level);
+    return sum;
+  }
+
+ private:
+  /** A cube of a's cells, all holding v: zero if b holds v throughout, else its octants' sums. */
+  std::uint64_t cube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
+    const Key corner{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)};
+    if (level == 0) {
+      CellMatch m;
+      return search_.nearest(corner, m, cap_) ? std::uint64_t(m.distance) : std::uint64_t(cap_);
+    }
+    // The maps share their grid, so the cube is aligned in b too: b holds one state throughout it when the
+    // bitmap octant holding its corner is at least as large.
+    const unsigned bottom = b_cells_.locatePath(corner);
+    if (bottom > level &&
+        node::state(b_cells_.tree().words()[b_cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == v_)
+      return 0;
+    const std::uint32_t half = std::uint32_t(1) << (level - 1);
+    std::uint64_t sum = 0;
+    for (unsigned o = 0; o < 8; ++o)
+      sum += cube(x + (o & 1u) * half, y + ((o >> 1) & 1u) * half, z + ((o >> 2) & 1u) * half, level - 1);
+    return sum;
+  }
+
+  CellState v_;
+  std::int64_t cap_;
+  NearestCellSearch search_;
+  ConstAccessor b_cells_;
+};
+
+/** d(a, b, v) of eq. 2, split over threads by cell counts; integer sums, so any split gives the same. */
+std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap, unsigned threads) {
+  std::vector<Region> regions;
+  std::vector<std::uint64_t> cells_before;  // running cell count, for splitting the work evenly
+  std::uint64_t total = 0;
+  a.forEachRegion([&](const Region& r) {
+    if (r.state != v) return;
+    regions.push_back(r);
+    cells_before.push_back(total);
+    total += std::uint64_t(1) << (3 * std::min(r.level, 21u));
+  });
+  const unsigned workers = std::max(1u, std::min<unsigned>(threads, unsigned(regions.size())));
+  std::vector<std::size_t> bounds(workers + 1, regions.size());
+  bounds[0] = 0;
+  for (unsigned w = 1; w < workers; ++w)
+    bounds[w] = std::size_t(std::lower_bound(cells_before.begin(), cells_before.end(), total / workers * w) -
+                            cells_before.begin());
+  std::vector<std::uint64_t> sums(workers, 0);
+  auto work = [&](unsigned w) {
+    DirectedSum sum(b, v, cap);
+    sums[w] = sum.regions(regions.data() + bounds[w], regions.data() + bounds[w + 1]);
+  };
+  std::vector<std::thread> pool;
+  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work, w);
+  work(0);
+  for (auto& t : pool) t.join();
+  std::uint64_t sum = 0;
+  for (std::uint64_t s : sums) sum += s;
+  return sum;
+}
+
+}  // namespace
+
+PsiResult psi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& options) {
+  if (a.getGrid() != b.getGrid())
+    throw std::invalid_argument("pcl::fot::psi: the maps must share their voxel grid (resolution and origin); got " +
+                                std::to_string(a.getResolution()) + " m and " + std::to_string(b.getResolution()) +
+                                " m cells");
+  if (options.cap < 0) throw std::invalid_argument("pcl::fot::psi: the cap must not be negative");
+  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  const bool capped = options.cap != std::numeric_limits<std::int64_t>::max();
+  PsiResult result;
+  result.resolution = a.getResolution();
+  const CellState values[] = {CellState::Occupied, CellState::Free};
+  for (CellState v : values) {
+    if (v == CellState::Free && !options.include_free) continue;
+    const std::uint64_t na = cellCount(a, v), nb = cellCount(b, v);
+    result.cells += na + nb;
+    if (na == 0 && nb == 0) continue;
+    if (na == 0 || nb == 0) {
+      // The other map has no such cell: there is no distance to take, unless a cap stands in for it.
+      if (!capped) {
+        result.defined = false;
+        continue;
+      }
+      result.sum += (na + nb) * std::uint64_t(options.cap);
+      continue;
+    }
+    result.sum += directed(a, b, v, options.cap, threads) + directed(b, a, v, options.cap, threads);
+  }
+  return result;
+}
+
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,188 @@
+// ψ on trees equals ψ by distance maps and by brute force, to the cell.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include <pcl/common/transforms.h>
+
+#include <pcl_fot/distance_map.h>
+#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/psi.h>
+
+#include "scan_data.h"
+
+using namespace pcl::fot;
+
+namespace {
+
+/** Eq. 1–2 by brute force over every pair of cells. */
+PsiResult bruteForcePsi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& o) {
+  PsiResult r;
+  r.resolution = a.getResolution();
+  for (CellState v : {CellState::Occupied, CellState::Free}) {
+    if (v == CellState::Free && !o.include_free) continue;
+    std::vector<Key> ca, cb;
+    a.forEachCell(v, [&](const Key& k) { ca.push_back(k); });
+    b.forEachCell(v, [&](const Key& k) { cb.push_back(k); });
+    r.cells += ca.size() + cb.size();
+    if (ca.empty() && cb.empty()) continue;
+    if (ca.empty() || cb.empty()) {
+      if (o.cap == std::numeric_limits<std::int64_t>::max())
+        r.defined = false;
+      else
+        r.sum += (ca.size() + cb.size()) * std::uint64_t(o.cap);
+      continue;
+    }
+    auto directed = [&](const std::vector<Key>& from, const std::vector<Key>& to) {
+      std::uint64_t sum = 0;
+      for (const Key& p : from) {
+        std::int64_t best = std::numeric_limits<std::int64_t>::max();
+        for (const Key& q : to)
+          best = std::min<std::int64_t>(best, std::abs(std::int64_t(p.x) - q.x) + std::abs(std::int64_t(p.y) - q.y) +
+                                                  std::abs(std::int64_t(p.z) - q.z));
+        sum += std::uint64_t(std::min(best, o.cap));
+      }
+      return sum;
+    };
+    r.sum += directed(ca, cb) + directed(cb, ca);
+  }
+  return r;
+}
+
+void expectSame(const PsiResult& a, const PsiResult& b, const char* what) {
+  EXPECT_EQ(a.sum, b.sum) << what;
+  EXPECT_EQ(a.cells, b.cells) << what;
+  EXPECT_EQ(a.defined, b.defined) << what;
+}
+
+/** The same cells in a tree and in a grid of the given side centred on key 0. */
+struct TwinMaps {
+  TwinMaps(double res, std::uint32_t side) : tree(res), grid(VoxelGrid(res), side) {}
+  void set(const Key& k, CellState s) {
+    tree.setCell(k, s);
+    grid.setCell(k, s);
+  }
+  FastOctTree tree;
+  FastOccMesh grid;
+};
+
+}  // namespace
+
+TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
+  std::mt19937 rng(61);
+  for (int trial = 0; trial < 6; ++trial) {
+    TwinMaps a(0.1, 64), b(0.1, 64);
+    const int n = 200 + 400 * trial;
+    for (int i = 0; i < n; ++i) {
+      // Clustered cells, some cubes filled whole so that regions collapse.
+      const Key k{std::int32_t(rng() % 40) - 20, std::int32_t(rng() % 40) - 20, std::int32_t(rng() % 40) - 20};
+      a.set(k, (rng() % 3) ? CellState::Occupied : CellState::Free);
+      const Key l{std::int32_t(rng() % 40) - 18, std::int32_t(rng() % 40) - 22, std::int32_t(rng() % 40) - 20};
+      b.set(l, (rng() % 3) ? CellState::Occupied : CellState::Free);
+    }
+    for (int z = 0; z < 4; ++z)
+      for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+          a.set({x + 4, y - 8, z}, CellState::Free);
+          b.set({x + 4, y - 8, z}, CellState::Free);
+        }
+    for (bool include_free : {false, true})
+      for (std::int64_t cap : {std::numeric_limits<std::int64_t>::max(), std::int64_t(3)}) {
+        PsiOptions o;
+        o.include_free = include_free;
+        o.cap = cap;
+        const PsiResult brute = bruteForcePsi(a.tree, b.tree, o);
+        expectSame(psi(a.tree, b.tree, o), brute, "tree");
+        expectSame(psiByDistanceMaps(a.grid, b.grid, o), brute, "distance maps");
+        o.threads = 4;
+        expectSame(psi(a.tree, b.tree, o), brute, "tree, four threads");
+      }
+  }
+}
+
+TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
+  struct Case {
+    const char* a;
+    const char* b;
+    double res;
+    std::uint32_t side;
+  };
+  for (const Case& c : {Case{"kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02, 256},
+                        Case{"room_scan1.pcd", "room_scan2.pcd", 0.1, 512}}) {
+    SCOPED_TRACE(c.a);
+    const VoxelGrid grid(c.res);
+    FastOctTree ta(grid), tb(grid);
+    const auto ca = pcl_fot_test::loadScan(c.a), cb = pcl_fot_test::loadScan(c.b);
+    insertPointCloud(ta, *ca);
+    insertPointCloud(tb, *cb);
+    // The grids' cubes start at the scans' lowest cell.
+    Key lo{kMaxKey, kMaxKey, kMaxKey};
+    for (const FastOctTree* t : {&ta, &tb})
+      t->forEachCell(CellState::Occupied, [&](const Key& k) {
+        lo = Key{std::min(lo.x, k.x), std::min(lo.y, k.y), std::min(lo.z, k.z)};
+      });
+    FastOccMesh ga(grid, c.side, lo), gb(grid, c.side, lo);
+    ASSERT_EQ(insertPointCloud(ga, *ca).out_of_range, 0u) << "the grid must hold the whole scan";
+    ASSERT_EQ(insertPointCloud(gb, *cb).out_of_range, 0u);
+    const PsiResult tree = psi(ta, tb), maps = psiByDistanceMaps(ga, gb);
+    expectSame(tree, maps, "occupied");
+    EXPECT_GT(tree.sum, 0u);
+    PsiOptions capped;
+    capped.cap = 5;
+    capped.threads = 0;
+    expectSame(psi(ta, tb, capped), psiByDistanceMaps(ga, gb, capped), "capped, all threads");
+  }
+}
+
+TEST(Psi, ZeroForEqualMapsAndSymmetric) {
+  const VoxelGrid grid(0.05);
+  FastOctTree a(grid), b(grid);
+  insertPointCloud(a, *pcl_fot_test::loadScan("room_scan1.pcd"));
+  insertPointCloud(b, *pcl_fot_test::loadScan("room_scan2.pcd"));
+  EXPECT_EQ(psi(a, a).sum, 0u);
+  EXPECT_EQ(psi(a, FastOctTree(a)).sum, 0u);
+  const PsiResult ab = psi(a, b), ba = psi(b, a);
+  EXPECT_EQ(ab.sum, ba.sum);
+  EXPECT_EQ(ab.cells, ba.cells);
+  EXPECT_DOUBLE_EQ(ab.metres(), double(ab.sum) * 0.05);
+  EXPECT_DOUBLE_EQ(ab.mean(), double(ab.sum) / double(ab.cells));
+}
+
+TEST(Psi, GrowsAsAScanIsShiftedFromItself) {
+  const auto cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
+  const double res = 0.02;
+  FastOctTree base(res);
+  insertPointCloud(base, *cloud);
+  std::uint64_t last = 0;
+  for (int step = 1; step <= 10; ++step) {
+    pcl::PointCloud<pcl::PointXYZ> shifted;
+    pcl::transformPointCloud(*cloud, shifted, Eigen::Affine3f(Eigen::Translation3f(float(step * res), 0.0f, 0.0f)));
+    FastOctTree moved(res);
+    insertPointCloud(moved, shifted);
+    const std::uint64_t s = psi(base, moved).sum;
+    EXPECT_GT(s, last) << "shift of " << step << " cells";
+    last = s;
+  }
+}
+
+TEST(Psi, ErrorsAndEmptySides) {
+  FastOctTree a(0.1), b(0.2), c(0.1, 0.05), empty(0.1);
+  a.setCell({1, 2, 3}, CellState::Occupied);
+  EXPECT_THROW(psi(a, b), std::invalid_argument) << "different resolutions";
+  EXPECT_THROW(psi(a, c), std::invalid_argument) << "different origins";
+  PsiOptions negative;
+  negative.cap = -1;
+  EXPECT_THROW(psi(a, a, negative), std::invalid_argument);
+  EXPECT_FALSE(psi(a, empty).defined) << "no occupied cell to measure to";
+  EXPECT_TRUE(psi(empty, empty).defined);
+  EXPECT_EQ(psi(empty, empty).sum, 0u);
+  PsiOptions capped;
+  capped.cap = 7;
+  const PsiResult r = psi(a, empty, capped);
+  EXPECT_TRUE(r.defined);
+  EXPECT_EQ(r.sum, 7u) << "each unmatched cell counts the cap";
+  FastOccMesh g1(VoxelGrid(0.1), 16), g2(VoxelGrid(0.1), 32);
+  EXPECT_THROW(psiByDistanceMaps(g1, g2), std::invalid_argument);
+}
