@@ -90,7 +90,7 @@ class NeighbourWalk {
     return gap[0][o & 1u] + gap[1][(o >> 1) & 1u] + gap[2][(o >> 2) & 1u];
   }
 
-  /** Sorts up to 8 children by their lower bounds: an insertion sort, cheapest at this size. */
+  /** Sorts up to 8 children by their lower bounds (those already beyond the result are left out first). */
   static void order(Child* c, int n) {
     for (int i = 1; i < n; ++i)
       for (int j = i; j > 0 && c[j].bound < c[j - 1].bound; --j) std::swap(c[j], c[j - 1]);
@@ -118,7 +118,8 @@ class NeighbourWalk {
         const NodeWord child = words_[first + o];
         if (node::isBitmap(child) && node::octantMask(child, target_) == 0) continue;
       }
-      c[n++] = Child{childBound(gap, o), o};
+      const Distance bound = childBound(gap, o);
+      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
     }
     order(c, n);
     const std::uint64_t rank = (bitmap && ranks_) ? ranks_[offset] : 0;
@@ -171,8 +172,11 @@ class NeighbourWalk {
     policy_.childGaps(base, sub, gap);
     Child c[8];
     int n = 0;
-    for (unsigned o = 0; o < 8; ++o)
-      if ((mask >> o) & 1u) c[n++] = Child{childBound(gap, o), o};
+    for (unsigned o = 0; o < 8; ++o) {
+      if (!((mask >> o) & 1u)) continue;
+      const Distance bound = childBound(gap, o);
+      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
+    }
     order(c, n);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
@@ -194,7 +198,8 @@ class NeighbourWalk {
     for (unsigned o = 0; o < 8; ++o) {
       const NodeWord child = words_[first + o];
       if (o == skip || (node::isBitmap(child) && node::octantMask(child, target_) == 0)) continue;
-      c[n++] = Child{childBound(gap, o), o};
+      const Distance bound = childBound(gap, o);
+      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
     }
     order(c, n);
     for (int i = 0; i < n; ++i) {
