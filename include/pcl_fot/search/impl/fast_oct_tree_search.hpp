@@ -1,9 +1,8 @@
 #pragma once
 
-#include <cstring>
-
 #include <pcl/console/print.h>
 
+#include <pcl_fot/cloud_fingerprint.h>
 #include <pcl_fot/search/fast_oct_tree_search.h>
 
 namespace pcl {
@@ -20,16 +19,9 @@ template <typename PointT>
 typename FastOctTreeSearch<PointT>::Source FastOctTreeSearch<PointT>::describe(
     const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const {
   Source s{cloud.get(), indices.get(), cloud ? cloud->size() : 0, 0};
-  if (!cloud) return s;
-  // FNV-1a over the coordinates and the subset: a cloud changed in place is seen as new.
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const void* data, std::size_t n) {
-    const unsigned char* b = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-  };
-  for (const auto& p : *cloud) mix(&p.x, 3 * sizeof(float));
-  if (indices && !indices->empty()) mix(indices->data(), indices->size() * sizeof(index_t));
-  s.fingerprint = h;
+  if (cloud && !cloud->empty())
+    s.fingerprint = cloudFingerprint(&(*cloud)[0].x, cloud->size(), sizeof(PointT), indices ? indices->data() : nullptr,
+                                     indices ? indices->size() : 0);
   return s;
 }
 
