@@ -8,6 +8,8 @@
 #include <pcl_fot/accessor.h>
 #include <pcl_fot/nearest_neighbor.h>
 
+#include "brick_distance.h"
+
 namespace pcl {
 namespace fot {
 namespace {
@@ -16,34 +18,55 @@ std::uint64_t cellCount(const FastOctTree& t, CellState v) {
   return v == CellState::Occupied ? t.getOccupiedCount() : t.getFreeCount();
 }
 
-/** Sums a's cells' distances to b's cells of one value, for a run of a's regions. */
+/**
+ * Sums a's cells' distances to b's cells of one value, for a run of a's regions in Morton order. Cells are
+ * taken a 16³ brick at a time. Bit dilation of b's cells around the brick settles those within 8 cells,
+ * then those within 16; the nearest-tree-neighbour search finds the rest, and the cells of bricks too
+ * sparse to be worth a window, each query starting from the previous one's path.
+ */
 class DirectedSum {
  public:
   DirectedSum(const FastOctTree& b, CellState v, std::int64_t cap)
-      : v_(v), cap_(cap), search_(b, Metric::Manhattan, v), b_cells_(b) {}
+      : v_(v), cap_(cap), parts_(b, v), search_(b, Metric::Manhattan, v), b_cells_(b) {}
 
   std::uint64_t regions(const Region* first, const Region* last) {
     std::uint64_t sum = 0;
-    for (const Region* r = first; r != last; ++r)
-      sum += cube(tree_coord::fromKey(r->min_key.x), tree_coord::fromKey(r->min_key.y),
-                  tree_coord::fromKey(r->min_key.z), r->level);
-    return sum;
+    for (const Region* r = first; r != last; ++r) {
+      const std::uint32_t x = tree_coord::fromKey(r->min_key.x), y = tree_coord::fromKey(r->min_key.y),
+                          z = tree_coord::fromKey(r->min_key.z);
+      if (r->level >= detail::kBrickLevel) {
+        sum += cube(x, y, z, r->level);
+        continue;
+      }
+      const std::uint32_t mask = ~((1u << detail::kBrickLevel) - 1);
+      const std::uint32_t corner[3] = {x & mask, y & mask, z & mask};
+      if (!std::equal(corner, corner + 3, corner_)) {  // Morton order: a brick's cells come together
+        sum += flush();
+        std::copy(corner, corner + 3, corner_);
+      }
+      brick_.setCube(x - corner[0], y - corner[1], z - corner[2], 1u << r->level);
+    }
+    return sum + flush();
   }
 
  private:
-  /** A cube of a's cells, all holding v: zero if b holds v throughout, else its octants' sums. */
+  /** Windows cost about as much as a few searches: below this many cells a brick is searched cell by cell. */
+  static constexpr unsigned kMinWindowCells = 4, kMinFarWindowCells = 24;
+
+  /** A cube of a's cells, all holding v, of at least a brick: zero if b holds v throughout, else by bricks. */
   std::uint64_t cube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
-    const Key corner{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)};
-    if (level == 0) {
-      CellMatch m;
-      return search_.nearest(corner, m, cap_) ? std::uint64_t(m.distance) : std::uint64_t(cap_);
-    }
     // The maps share their grid, so the cube is aligned in b too: b holds one state throughout it when the
     // bitmap octant holding its corner is at least as large.
-    const unsigned bottom = b_cells_.locatePath(corner);
+    const unsigned bottom = b_cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
     if (bottom > level &&
         node::state(b_cells_.tree().words()[b_cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == v_)
       return 0;
+    if (level == detail::kBrickLevel) {
+      detail::Brick full;
+      full.bits.fill(~std::uint64_t(0));
+      const std::uint32_t corner[3] = {x, y, z};
+      return brick(corner, full);
+    }
     const std::uint32_t half = std::uint32_t(1) << (level - 1);
     std::uint64_t sum = 0;
     for (unsigned o = 0; o < 8; ++o)
@@ -51,10 +74,39 @@ class DirectedSum {
     return sum;
   }
 
+  /** The brick collected so far, if any. */
+  std::uint64_t flush() {
+    if (!brick_.any()) return 0;
+    const std::uint64_t sum = brick(corner_, brick_);
+    brick_ = detail::Brick{};
+    return sum;
+  }
+
+  std::uint64_t brick(const std::uint32_t corner[3], detail::Brick& cells) {
+    std::uint64_t sum = 0;
+    if (cells.count() >= kMinWindowCells) sum += near_.settle(parts_, corner, cells, 0, cap_);
+    if (cells.count() >= kMinFarWindowCells) sum += far_.settle(parts_, corner, cells, 9, cap_);
+    constexpr unsigned side = detail::BrickWindow<8>::kSide;
+    for (unsigned w = 0; w < detail::Brick::kWords; ++w)
+      for (std::uint64_t left = cells.bits[w]; left; left &= left - 1) {
+        const unsigned i = w * 64 + unsigned(__builtin_ctzll(left));
+        const Key q{tree_coord::toKey(corner[0] + i % side), tree_coord::toKey(corner[1] + (i / side) % side),
+                    tree_coord::toKey(corner[2] + i / (side * side))};
+        CellMatch m;
+        sum += search_.nearest(q, m, cap_) ? std::uint64_t(m.distance) : std::uint64_t(cap_);
+      }
+    return sum;
+  }
+
   CellState v_;
   std::int64_t cap_;
+  detail::PartCache parts_;
+  detail::BrickWindow<8> near_;
+  detail::BrickWindow<16> far_;
   NearestCellSearch search_;
   ConstAccessor b_cells_;
+  detail::Brick brick_;
+  std::uint32_t corner_[3] = {0, 0, 0};
 };
 
 /** d(a, b, v) of eq. 2, split over threads by cell counts; integer sums, so any split gives the same. */

@@ -17,38 +17,38 @@ using namespace pcl::fot;
 
 namespace {
 
-/** Eq. 1–2 by brute force over every pair of cells. */
-PsiResult bruteForcePsi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& o) {
-  PsiResult r;
-  r.resolution = a.getResolution();
+/** Eq. 1–2 by brute force over every pair of cells, for each cap in `caps`. */
+std::vector<PsiResult> bruteForcePsi(const FastOctTree& a, const FastOctTree& b, bool include_free,
+                                     const std::vector<std::int64_t>& caps) {
+  std::vector<PsiResult> results(caps.size());
+  for (auto& r : results) r.resolution = a.getResolution();
   for (CellState v : {CellState::Occupied, CellState::Free}) {
-    if (v == CellState::Free && !o.include_free) continue;
+    if (v == CellState::Free && !include_free) continue;
     std::vector<Key> ca, cb;
     a.forEachCell(v, [&](const Key& k) { ca.push_back(k); });
     b.forEachCell(v, [&](const Key& k) { cb.push_back(k); });
-    r.cells += ca.size() + cb.size();
-    if (ca.empty() && cb.empty()) continue;
-    if (ca.empty() || cb.empty()) {
-      if (o.cap == std::numeric_limits<std::int64_t>::max())
-        r.defined = false;
-      else
-        r.sum += (ca.size() + cb.size()) * std::uint64_t(o.cap);
-      continue;
-    }
+    std::vector<std::int64_t> nearest;  // every cell's distance to the other map, both directions
     auto directed = [&](const std::vector<Key>& from, const std::vector<Key>& to) {
-      std::uint64_t sum = 0;
       for (const Key& p : from) {
         std::int64_t best = std::numeric_limits<std::int64_t>::max();
         for (const Key& q : to)
           best = std::min<std::int64_t>(best, std::abs(std::int64_t(p.x) - q.x) + std::abs(std::int64_t(p.y) - q.y) +
                                                   std::abs(std::int64_t(p.z) - q.z));
-        sum += std::uint64_t(std::min(best, o.cap));
+        nearest.push_back(best);
       }
-      return sum;
     };
-    r.sum += directed(ca, cb) + directed(cb, ca);
+    directed(ca, cb);
+    directed(cb, ca);
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+      PsiResult& r = results[i];
+      r.cells += ca.size() + cb.size();
+      const bool capped = caps[i] != std::numeric_limits<std::int64_t>::max();
+      if ((ca.empty() != cb.empty()) && !capped) r.defined = false;
+      for (std::int64_t d : nearest)
+        if (d != std::numeric_limits<std::int64_t>::max() || capped) r.sum += std::uint64_t(std::min(d, caps[i]));
+    }
   }
-  return r;
+  return results;
 }
 
 void expectSame(const PsiResult& a, const PsiResult& b, const char* what) {
@@ -72,33 +72,49 @@ struct TwinMaps {
 
 TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
   std::mt19937 rng(61);
-  for (int trial = 0; trial < 6; ++trial) {
-    TwinMaps a(0.1, 64), b(0.1, 64);
-    const int n = 200 + 400 * trial;
+  for (int trial = 0; trial < 8; ++trial) {
+    SCOPED_TRACE(trial);
+    // Tiny maps (a root below a brick), dense clusters (cells within the bit-dilation reach) and sparse
+    // ones (most cells further than 8, left to the tree search).
+    const int n = trial < 2 ? 1 + 2 * trial : 150 + 250 * trial;
+    const int spread = trial % 2 ? 100 : 40;
+    TwinMaps a(0.1, 128), b(0.1, 128);
+    auto cell = [&](int shift_x, int shift_y) {
+      return Key{std::int32_t(rng() % spread) - spread / 2 + shift_x, std::int32_t(rng() % spread) - spread / 2 + shift_y,
+                 std::int32_t(rng() % spread) - spread / 2};
+    };
     for (int i = 0; i < n; ++i) {
-      // Clustered cells, some cubes filled whole so that regions collapse.
-      const Key k{std::int32_t(rng() % 40) - 20, std::int32_t(rng() % 40) - 20, std::int32_t(rng() % 40) - 20};
-      a.set(k, (rng() % 3) ? CellState::Occupied : CellState::Free);
-      const Key l{std::int32_t(rng() % 40) - 18, std::int32_t(rng() % 40) - 22, std::int32_t(rng() % 40) - 20};
-      b.set(l, (rng() % 3) ? CellState::Occupied : CellState::Free);
+      a.set(cell(0, 0), (rng() % 3) ? CellState::Occupied : CellState::Free);
+      b.set(cell(2, -2), (rng() % 3) ? CellState::Occupied : CellState::Free);
     }
-    for (int z = 0; z < 4; ++z)
-      for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) {
-          a.set({x + 4, y - 8, z}, CellState::Free);
-          b.set({x + 4, y - 8, z}, CellState::Free);
-        }
-    for (bool include_free : {false, true})
-      for (std::int64_t cap : {std::numeric_limits<std::int64_t>::max(), std::int64_t(3)}) {
+    if (trial >= 2) {
+      // Whole cubes, so that regions collapse: a 4³ one in both, a 16³ one (a level-4 node: key 6 is
+      // aligned in tree coordinates) free in both, and another occupied in a alone.
+      auto fill = [](TwinMaps& m, int x0, int y0, int z0, int side, CellState s) {
+        for (int z = 0; z < side; ++z)
+          for (int y = 0; y < side; ++y)
+            for (int x = 0; x < side; ++x) m.set({x0 + x, y0 + y, z0 + z}, s);
+      };
+      fill(a, 4, -8, 0, 4, CellState::Free);
+      fill(b, 4, -8, 0, 4, CellState::Free);
+      fill(a, -26, -26, -26, 16, CellState::Free);
+      fill(b, -26, -26, -26, 16, CellState::Free);
+      fill(a, 6, 6, 6 + 16 * (trial % 3), 16, CellState::Occupied);
+    }
+    const std::vector<std::int64_t> caps = {std::numeric_limits<std::int64_t>::max(), 0, 3, 8, 9, 20};
+    for (bool include_free : {false, true}) {
+      const std::vector<PsiResult> brute = bruteForcePsi(a.tree, b.tree, include_free, caps);
+      for (std::size_t i = 0; i < caps.size(); ++i) {
+        SCOPED_TRACE(caps[i]);
         PsiOptions o;
         o.include_free = include_free;
-        o.cap = cap;
-        const PsiResult brute = bruteForcePsi(a.tree, b.tree, o);
-        expectSame(psi(a.tree, b.tree, o), brute, "tree");
-        expectSame(psiByDistanceMaps(a.grid, b.grid, o), brute, "distance maps");
+        o.cap = caps[i];
+        expectSame(psi(a.tree, b.tree, o), brute[i], "tree");
+        if (i % 2 == 0) expectSame(psiByDistanceMaps(a.grid, b.grid, o), brute[i], "distance maps");
         o.threads = 4;
-        expectSame(psi(a.tree, b.tree, o), brute, "tree, four threads");
+        expectSame(psi(a.tree, b.tree, o), brute[i], "tree, four threads");
       }
+    }
   }
 }
 

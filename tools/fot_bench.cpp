@@ -25,6 +25,9 @@ void printHelp(const char* prog) {
       "  -data <dir>      directory with the scans of PCL's data repository (default: ../shared/data)\n"
       "  -out <file>      Markdown report to write (default: doc/benchmarks.md)\n"
       "  -repeats <n>     insertions per cloud and structure (default: 20, as in the paper)\n"
+      "  -ray_repeats <n> rounds of the ray tracing, search and psi timings (default: 5)\n"
+      "  -dmap_repeats <n> runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
+      "  -sections <list> comma-separated subset of: cells,rays,search,psi (default: all)\n"
       "  -h               this help\n",
       prog);
 }
@@ -45,13 +48,17 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::string data_dir = "../shared/data", out = "doc/benchmarks.md";
-  int repeats = 20, ray_repeats = 5;
+  int repeats = 20, ray_repeats = 5, dmap_repeats = 3;
   parse_argument(argc, argv, "-data", data_dir);
   parse_argument(argc, argv, "-out", out);
   parse_argument(argc, argv, "-repeats", repeats);
   parse_argument(argc, argv, "-ray_repeats", ray_repeats);
-  if (repeats < 1 || ray_repeats < 1) {
-    print_error("-repeats and -ray_repeats must be at least 1\n");
+  parse_argument(argc, argv, "-dmap_repeats", dmap_repeats);
+  std::string sections = "cells,rays,search,psi";
+  parse_argument(argc, argv, "-sections", sections);
+  auto wanted = [&](const std::string& s) { return ("," + sections + ",").find("," + s + ",") != std::string::npos; };
+  if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1) {
+    print_error("-repeats, -ray_repeats and -dmap_repeats must be at least 1\n");
     return 1;
   }
   try {
@@ -72,9 +79,12 @@ int main(int argc, char** argv) {
        << __VERSION__ << ".\n\n"
        << "Scans (PCL's data repository): the Kinect frames at 1 cm, the room scans at 5 cm, the terrain "
           "sample at 0.30 m around its own centre, so that each fits the paper's 1024³ grid.\n\n";
-    md << fot_bench::benchCellAccess(scans, repeats) << "\n";
-    md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
-    md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
+    if (wanted("cells")) md << fot_bench::benchCellAccess(scans, repeats) << "\n";
+    if (wanted("rays")) md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
+    if (wanted("search")) md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
+    const std::string doc_dir = out.find('/') == std::string::npos ? "." : out.substr(0, out.rfind('/'));
+    if (wanted("psi"))
+      md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, doc_dir + "/psi_random_maps.png") << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
   } catch (const std::exception& e) {

@@ -1,0 +1,123 @@
+#include "brick_distance.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace pcl {
+namespace fot {
+namespace detail {
+
+PartCache::PartCache(const FastOctTree& tree, CellState state)
+    : tree_(tree), state_(state), cells_(tree), slots_(4096) {}
+
+void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& out) {
+  out.part = Part{};
+  const NodeWord* words = tree_.words();
+  const unsigned root_level = tree_.rootLevel();
+  if (root_level <= 3) {  // the whole tree fits one part: it lies inside this one or outside it
+    const auto& base = tree_.rootBase();
+    if (((base[0] - x) | (base[1] - y) | (base[2] - z)) < 8)
+      out.part.setFromWord(words, tree_.rootWord(), root_level, base[0] - x, base[1] - y, base[2] - z, state_);
+  } else {
+    const unsigned bottom = cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
+    if (bottom > 3) {  // inside a uniform octant at least as large as the part
+      if (node::state(words[cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == state_)
+        out.part.bits.fill(~std::uint64_t(0));
+    } else if (bottom != 0) {
+      out.part.setFromWord(words, words[cells_.pathOffset(3)], 3, 0, 0, 0, state_);
+    }
+  }
+  out.empty = !out.part.any();
+}
+
+const PartCache::Entry& PartCache::part(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  const std::size_t slot = ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) % slots_.size();
+  Entry& e = slots_[slot];
+  if (!e.valid || e.corner[0] != x || e.corner[1] != y || e.corner[2] != z) {
+    read(x, y, z, e);
+    e.corner[0] = x, e.corner[1] = y, e.corner[2] = z;
+    e.valid = true;
+  }
+  return e;
+}
+
+template <unsigned Reach>
+bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
+  Row* r = rows(current_);
+  std::fill(r, r + kWindow * kWindow, Row(0));
+  bool any = false;
+  constexpr unsigned kParts = kWindow / 8;
+  for (unsigned k = 0; k < kParts; ++k)
+    for (unsigned j = 0; j < kParts; ++j)
+      for (unsigned i = 0; i < kParts; ++i) {
+        const PartCache::Entry& p = parts.part(lo[0] + 8 * i, lo[1] + 8 * j, lo[2] + 8 * k);
+        if (p.empty) continue;
+        any = true;
+        for (unsigned z = 0; z < 8; ++z) {
+          const std::uint64_t slice = p.part.bits[z];  // row y of this slice is byte y
+          if (!slice) continue;
+          Row* at = r + (8 * k + z) * kWindow + 8 * j;
+          for (unsigned y = 0; y < 8; ++y) at[y] |= Row((slice >> (8 * y)) & 0xFFu) << (8 * i);
+        }
+      }
+  return any;
+}
+
+template <unsigned Reach>
+void BrickWindow<Reach>::dilate(unsigned step) {
+  const Row* in = rows(current_);
+  Row* out = rows(current_ ^ 1);
+  // Errors from the unseen outside move inwards one row per step: later steps read only [step, kWindow - step).
+  for (unsigned z = step; z < kWindow - step; ++z)
+    for (unsigned y = step; y < kWindow - step; ++y) {
+      const std::size_t i = z * kWindow + y;
+      const Row c = in[i];
+      out[i] = c | Row(c << 1) | Row(c >> 1) | in[i - 1] | in[i + 1] | in[i - kWindow] | in[i + kWindow];
+    }
+  current_ ^= 1;
+}
+
+template <unsigned Reach>
+unsigned BrickWindow<Reach>::take(Brick& cells) {
+  const Row* r = rows(current_);
+  unsigned n = 0;
+  for (unsigned w = 0; w < Brick::kWords; ++w) {
+    if (!cells.bits[w]) continue;
+    std::uint64_t met = 0;
+    for (unsigned q = 0; q < Brick::kRowsPerWord; ++q) {
+      const unsigned row = w * Brick::kRowsPerWord + q, y = row % kSide, z = row / kSide;
+      met |= std::uint64_t((r[(Reach + z) * kWindow + Reach + y] >> Reach) & 0xFFFFu) << (kSide * q);
+    }
+    const std::uint64_t hit = cells.bits[w] & met;
+    cells.bits[w] &= ~hit;
+    n += popcount64(hit);
+  }
+  return n;
+}
+
+template <unsigned Reach>
+std::uint64_t BrickWindow<Reach>::settle(PartCache& parts, const std::uint32_t corner[3], Brick& cells,
+                                         unsigned from, std::int64_t cap) {
+  const std::uint32_t lo[3] = {corner[0] - Reach, corner[1] - Reach, corner[2] - Reach};
+  const unsigned last = unsigned(std::min<std::int64_t>(cap, Reach));
+  std::uint64_t sum = 0;
+  if (load(parts, lo)) {
+    if (from == 0) take(cells);
+    for (unsigned d = 1; d <= last && cells.any(); ++d) {
+      dilate(d);
+      if (d >= from) sum += std::uint64_t(d) * take(cells);
+    }
+  }
+  if (cap <= std::int64_t(Reach)) {  // every cell left is at least cap away
+    sum += std::uint64_t(cap) * cells.count();
+    cells = Brick{};
+  }
+  return sum;
+}
+
+template class BrickWindow<8>;
+template class BrickWindow<16>;
+
+}  // namespace detail
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,268 @@
+// Paper Table V and Fig. 5: ψ by the nearest-tree-neighbour against dmap_v on the 1024³ grid, and against
+// nanoflann L1.
+#include "sections.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+
+#include <pcl/common/transforms.h>
+#include <nanoflann.hpp>
+
+#include <pcl_fot/distance_map.h>
+#include <pcl_fot/io/atomic_file.h>
+#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/psi.h>
+
+#include "bench_util.h"
+
+namespace fot_bench {
+namespace {
+
+using pcl::fot::CellState;
+using pcl::fot::Key;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+constexpr std::uint32_t kGridSide = 1024;
+
+/** Two maps of one comparison, as cell keys. */
+struct MapPair {
+  std::string name;
+  double res;
+  std::vector<Key> a, b;
+};
+
+std::vector<Key> occupiedKeys(const Cloud& cloud, const pcl::fot::VoxelGrid& grid) {
+  pcl::fot::FastOctTree tree(grid);
+  pcl::fot::insertPointCloud(tree, cloud);
+  std::vector<Key> keys;
+  tree.forEachCell(CellState::Occupied, [&](const Key& k) { keys.push_back(k); });
+  return keys;
+}
+
+MapPair scanPair(const BenchScan& a, const BenchScan& b, double res, const Eigen::Affine3f& b_pose,
+                 const std::string& label) {
+  const pcl::fot::VoxelGrid grid(res);
+  Cloud moved;
+  pcl::transformPointCloud(*b.cloud, moved, b_pose);
+  return {format("%s (%.2f m)", label.c_str(), res), res, occupiedKeys(*a.cloud, grid), occupiedKeys(moved, grid)};
+}
+
+pcl::fot::FastOctTree treeOf(const std::vector<Key>& keys, const pcl::fot::VoxelGrid& grid) {
+  pcl::fot::FastOctTree tree(grid);
+  tree.insertKeys(keys.data(), keys.size());
+  return tree;
+}
+
+/** The lowest key of both maps: the 1024³ grid's corner. False if the maps do not fit one grid. */
+bool gridCorner(const MapPair& p, Key& lo) {
+  lo = Key{pcl::fot::kMaxKey, pcl::fot::kMaxKey, pcl::fot::kMaxKey};
+  Key hi{pcl::fot::kMinKey, pcl::fot::kMinKey, pcl::fot::kMinKey};
+  for (const auto* keys : {&p.a, &p.b})
+    for (const Key& k : *keys) {
+      lo = Key{std::min(lo.x, k.x), std::min(lo.y, k.y), std::min(lo.z, k.z)};
+      hi = Key{std::max(hi.x, k.x), std::max(hi.y, k.y), std::max(hi.z, k.z)};
+    }
+  return hi.x - lo.x < std::int32_t(kGridSide) && hi.y - lo.y < std::int32_t(kGridSide) &&
+         hi.z - lo.z < std::int32_t(kGridSide);
+}
+
+struct PsiTimes {
+  std::vector<double> tree, dmap;  // ms per ψ
+  std::uint64_t tree_sum = 0, dmap_sum = 0;
+};
+
+PsiTimes timePsi(const MapPair& p, int tree_repeats, int dmap_repeats) {
+  const pcl::fot::VoxelGrid grid(p.res);
+  const pcl::fot::FastOctTree ta = treeOf(p.a, grid), tb = treeOf(p.b, grid);
+  PsiTimes t;
+  for (int r = 0; r < tree_repeats; ++r) {
+    scrubCaches();
+    t.tree.push_back(timeOnce([&] { t.tree_sum = pcl::fot::psi(ta, tb).sum; }) * 1e3);
+  }
+  Key lo;
+  if (!gridCorner(p, lo)) throw std::runtime_error(p.name + " does not fit a 1024³ grid");
+  pcl::fot::FastOccMesh ga(grid, kGridSide, lo), gb(grid, kGridSide, lo);
+  ga.insertKeys(p.a.data(), p.a.size());
+  gb.insertKeys(p.b.data(), p.b.size());
+  for (int r = 0; r < dmap_repeats; ++r)
+    t.dmap.push_back(timeOnce([&] { t.dmap_sum = pcl::fot::psiByDistanceMaps(ga, gb).sum; }) * 1e3);
+  return t;
+}
+
+/** nanoflann's dataset adaptor over voxel centres, in cell units. */
+struct Centres {
+  std::vector<float> xyz;
+  explicit Centres(const std::vector<Key>& keys) {
+    for (const Key& k : keys) xyz.insert(xyz.end(), {float(k.x), float(k.y), float(k.z)});
+  }
+  std::size_t kdtree_get_point_count() const { return xyz.size() / 3; }
+  float kdtree_get_pt(std::size_t i, std::size_t d) const { return xyz[3 * i + d]; }
+  template <typename Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+using NanoL1 = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L1_Adaptor<float, Centres>, Centres, 3, unsigned>;
+
+/** ψ's two directed sums with nanoflann L1 trees, built from the voxel centres. */
+double nanoflannPsi(const Centres& a, const Centres& b) {
+  auto directed = [](const Centres& from, const Centres& to) {
+    NanoL1 tree(3, to, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    tree.buildIndex();
+    double sum = 0;
+    for (std::size_t i = 0; i < from.kdtree_get_point_count(); ++i) {
+      unsigned idx;
+      float d;
+      tree.knnSearch(&from.xyz[3 * i], 1, &idx, &d);
+      sum += d;
+    }
+    return sum;
+  };
+  return directed(a, b) + directed(b, a);
+}
+
+std::string tableV(const std::vector<MapPair>& pairs, int dmap_repeats, std::vector<std::string>& verdicts) {
+  Table t({"maps", "cells a / b", "tree ψ mean ms", "variance", "dmap_v mean ms", "variance", "speed-up",
+           "same ψ"});
+  double worst = 1e300, best = 0;
+  for (const MapPair& p : pairs) {
+    std::fprintf(stderr, "  psi: Table V, %s\n", p.name.c_str());
+    const PsiTimes times = timePsi(p, 5, dmap_repeats);
+    const double speedup = mean(times.dmap) / mean(times.tree);
+    worst = std::min(worst, speedup);
+    best = std::max(best, speedup);
+    t.add({p.name, format("%zu / %zu", p.a.size(), p.b.size()), format("%.3f", mean(times.tree)),
+           format("%.5f", variance(times.tree)), format("%.0f", mean(times.dmap)), format("%.0f", variance(times.dmap)),
+           format("**%.0f×**", speedup), times.tree_sum == times.dmap_sum ? "yes" : "**NO**"});
+  }
+  verdicts.push_back(format("Table V: tree ψ is **%.0f× to %.0f×** faster than dmap_v at 1024³ on the real scans "
+                            "(target 10,000×; the paper: 1,376× to 39,255×).",
+                            worst, best));
+  return format(
+             "### Real scans (paper Table V)\n\n"
+             "Pairs of scans of one scene, as the paper compares consecutive frames. The Kinect frames in their own "
+             "frames (the camera barely moved); room_scan2 placed on room_scan1 by the NDT tutorial's initial guess. "
+             "Times are the mean and variance (ms²) of 5 tree ψ runs and %d dmap_v runs; dmap_v builds both maps' "
+             "distance maps on the 1024³ grid (2 GiB each) and reads them off at the other map's cells.\n\n",
+             dmap_repeats) +
+         t.markdown();
+}
+
+std::string versusNanoflann(const std::vector<MapPair>& pairs, int repeats, std::vector<std::string>& verdicts) {
+  Table t({"maps", "cells a / b", "tree ψ ms", "tree ψ, 2 threads ms", "nanoflann L1 ms", "nanoflann / tree",
+           "same ψ"});
+  double worst = 1e300;
+  for (const MapPair& p : pairs) {
+    std::fprintf(stderr, "  psi: against nanoflann, %s\n", p.name.c_str());
+    const pcl::fot::VoxelGrid grid(p.res);
+    const pcl::fot::FastOctTree ta = treeOf(p.a, grid), tb = treeOf(p.b, grid);
+    const Centres ca(p.a), cb(p.b);
+    std::vector<double> tree, threaded, nano;
+    std::uint64_t sum = 0, sum_threaded = 0;
+    double nano_sum = 0;
+    pcl::fot::PsiOptions two;
+    two.threads = 2;
+    for (int r = 0; r < repeats; ++r) {
+      scrubCaches();
+      tree.push_back(timeOnce([&] { sum = pcl::fot::psi(ta, tb).sum; }) * 1e3);
+      scrubCaches();
+      threaded.push_back(timeOnce([&] { sum_threaded = pcl::fot::psi(ta, tb, two).sum; }) * 1e3);
+      scrubCaches();
+      nano.push_back(timeOnce([&] { nano_sum = nanoflannPsi(ca, cb); }) * 1e3);
+    }
+    const double ratio = median(nano) / median(tree);
+    worst = std::min(worst, ratio);
+    t.add({p.name, format("%zu / %zu", p.a.size(), p.b.size()), format("%.2f", median(tree)),
+           format("%.2f", median(threaded)), format("%.2f", median(nano)), format("**%.2f×**", ratio),
+           sum == std::uint64_t(nano_sum) && sum == sum_threaded ? "yes" : "**NO**"});
+  }
+  verdicts.push_back(format("Tree ψ against the same sums with nanoflann L1 (build included): at least **%.2f×** "
+                            "faster (target 2×).",
+                            worst));
+  return format(
+             "### Against nanoflann\n\n"
+             "The same ψ as two nanoflann L1 k-d trees give it: each map's voxel centres (in cell units) indexed, "
+             "then 1-NN of every cell of the other map; index build included, extracting the centres not. Medians "
+             "of %d runs. The tree ψ reads the maps as they are.\n\n",
+             repeats) +
+         t.markdown();
+}
+
+/** Fig. 5: uniform random cells in the 1024³ cube. */
+std::string figure5(int repeats, const std::string& plot_file, std::vector<std::string>& verdicts) {
+  const int sizes[] = {100, 300, 1000, 3000, 10000, 30000, 100000};
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::int32_t> coord(0, kGridSide - 1);
+  Table t({"cells per map", "tree ψ median ms", "dmap_v ms", "speed-up"});
+  std::string data;
+  for (int n : sizes) {
+    std::fprintf(stderr, "  psi: Fig. 5, %d random cells\n", n);
+    MapPair p{format("%d random", n), 0.05, {}, {}};
+    for (auto* keys : {&p.a, &p.b})
+      for (int i = 0; i < n; ++i) keys->push_back(Key{coord(rng), coord(rng), coord(rng)});
+    const PsiTimes times = timePsi(p, repeats, 1);
+    const double tree = median(times.tree), dmap = times.dmap[0];
+    t.add({format("%d", n), format("%.3f", tree), format("%.0f", dmap), format("%.0f×", dmap / tree)});
+    data += format("%d %.6f %.3f %.3f\n", n, tree, dmap, dmap / tree);
+    if (times.tree_sum != times.dmap_sum) verdicts.push_back(format("**ψ differs** for %d random cells", n));
+  }
+  std::string plot;
+  const std::string data_file = plot_file + ".dat", script_file = plot_file + ".gp";
+  pcl::fot::io::writeFileAtomically(data_file, data);
+  pcl::fot::io::writeFileAtomically(
+      script_file,
+      format("set terminal pngcairo size 900,600\nset output '%s.tmp'\nset logscale xy\nset grid\n"
+             "set xlabel 'cells per map'\nset ylabel 'ms (speed-up: ratio)'\n"
+             "set title 'psi on random maps in a 1024^3 cube'\nset key top left\n"
+             "plot '%s' using 1:2 with linespoints title 'tree psi (ms)', "
+             "'' using 1:3 with linespoints title 'dmap_v (ms)', "
+             "'' using 1:4 with linespoints title 'speed-up dmap_v / tree'\n",
+             plot_file.c_str(), data_file.c_str()));
+  const std::string command = "gnuplot '" + script_file + "' && mv '" + plot_file + ".tmp' '" + plot_file + "'";
+  if (std::system(command.c_str()) == 0) {
+    plot = format("![ψ on random maps](%s)\n\n", plot_file.substr(plot_file.rfind('/') + 1).c_str());
+  } else {
+    std::fprintf(stderr, "  psi: gnuplot failed; the table has the figures\n");
+  }
+  std::remove(data_file.c_str());
+  std::remove(script_file.c_str());
+  return "### Random maps (paper Fig. 5)\n\n"
+         "Two maps of n uniformly random cells each in the 1024³ cube; tree ψ is the median of " +
+         std::to_string(repeats) + " runs, dmap_v one run. Log axes.\n\n" + plot + t.markdown();
+}
+
+const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& name) {
+  for (const auto& s : scans)
+    if (s.name == name) return s;
+  throw std::runtime_error("missing scan " + name);
+}
+
+}  // namespace
+
+std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats, const std::string& plot_file) {
+  const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
+  const Eigen::Affine3f ndt_guess =
+      Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) * Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
+  const BenchScan &k1 = find(scans, "kinect_capture0001"), &k2 = find(scans, "kinect_capture0002"),
+                  &k3 = find(scans, "kinect_capture0003"), &r1 = find(scans, "room_scan1"),
+                  &r2 = find(scans, "room_scan2");
+  std::vector<MapPair> pairs;
+  for (double res : {0.05, 0.02, 0.01}) {
+    pairs.push_back(scanPair(k1, k2, res, identity, "kinect 1 / 2"));
+    pairs.push_back(scanPair(k2, k3, res, identity, "kinect 2 / 3"));
+  }
+  for (double res : {0.1, 0.05}) pairs.push_back(scanPair(r1, r2, res, ndt_guess, "room 1 / 2"));
+
+  std::vector<std::string> verdicts;
+  std::string out = "## Map similarity ψ (paper §IV–V)\n\n";
+  out += "ψ of two binary maps (occupied cells), exact: each table checks that every method gives the same sum.\n\n";
+  out += tableV(pairs, dmap_repeats, verdicts) + "\n";
+  out += versusNanoflann(pairs, repeats, verdicts) + "\n";
+  out += figure5(repeats, plot_file, verdicts) + "\n";
+  out += "Summary:\n\n";
+  for (const auto& v : verdicts) out += "- " + v + "\n";
+  return out;
+}
+
+}  // namespace fot_bench
