@@ -8,7 +8,7 @@ packages=(
   libpcl-dev pcl-tools libeigen3-dev libflann-dev   # PCL, Eigen, FLANN
   libboost-dev googletest libgtest-dev              # Boost, GoogleTest
   liboctomap-dev libnanoflann-dev libbenchmark-dev  # reference peers for tests and benchmarks
-  xvfb x11-apps imagemagick xdotool                 # pcl_viewer screenshots under a virtual display
+  xvfb x11-apps imagemagick libgl1-mesa-dri         # pcl_viewer screenshots: virtual display, software GL
   gnuplot-nox                                       # benchmark plots
 )
 

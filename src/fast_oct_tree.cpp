@@ -81,6 +81,112 @@ InsertStats FastOctTree::insertPoints(const float* xyz, std::size_t count, std::
   return stats;
 }
 
+void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
+  if (!isValidKey(lo)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", lo);
+  if (!isValidKey(hi)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", hi);
+  if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z)
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box " + toString(lo) + " to " + toString(hi) +
+                                " is empty");
+  const std::uint64_t sx = std::uint64_t(hi.x - lo.x) + 1, sy = std::uint64_t(hi.y - lo.y) + 1,
+                      sz = std::uint64_t(hi.z - lo.z) + 1;
+  if ((unsigned __int128)(sx * sy) * sz >= (unsigned __int128)1 << 60)
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box holds 2^60 cells or more");
+  const std::uint64_t l[3] = {tree_coord::fromKey(lo.x), tree_coord::fromKey(lo.y), tree_coord::fromKey(lo.z)};
+  const std::uint64_t h[3] = {tree_coord::fromKey(hi.x), tree_coord::fromKey(hi.y), tree_coord::fromKey(hi.z)};
+  // Split the smallest aligned cube holding the box down to the cubes inside it.
+  auto split = [&](auto& self, std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) -> void {
+    const std::uint64_t c[3] = {x, y, z}, last = (std::uint64_t(1) << level) - 1;
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] > h[a] || c[a] + last < l[a]) return;
+      inside = inside && c[a] >= l[a] && c[a] + last <= h[a];
+    }
+    if (inside) {
+      setCube(x, y, z, level, state);
+      return;
+    }
+    const std::uint32_t half = std::uint32_t(1) << (level - 1);
+    for (unsigned o = 0; o < 8; ++o)
+      self(self, x + (o & 1u) * half, y + ((o >> 1) & 1u) * half, z + ((o >> 2) & 1u) * half, level - 1);
+  };
+  const unsigned top = tree_coord::commonLevel(std::uint32_t(l[0] ^ h[0]), std::uint32_t(l[1] ^ h[1]),
+                                               std::uint32_t(l[2] ^ h[2]));
+  const std::uint32_t mask = ~((std::uint32_t(1) << top) - 1);
+  split(split, std::uint32_t(l[0]) & mask, std::uint32_t(l[1]) & mask, std::uint32_t(l[2]) & mask, top);
+}
+
+void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, CellState state) {
+  if (level == 0) {
+    Accessor(*this, false).setValidCell(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)}, state);
+    return;
+  }
+  const std::uint32_t apart = (x ^ base_[0]) | (y ^ base_[1]) | (z ^ base_[2]);
+  const bool cube_in_root = level <= root_level_ && (apart >> root_level_) == 0;
+  const bool root_in_cube = root_level_ <= level && (apart >> level) == 0;
+  if (!cube_in_root) {
+    if (state == CellState::Unknown) {  // nothing is known outside the root
+      if (root_in_cube) {
+        ++version_;
+        releaseSubtree(words_[0], root_level_);
+        words_[0] = node::uniform(CellState::Unknown);
+      }
+      return;
+    }
+    const std::uint32_t far = (std::uint32_t(1) << level) - 1;
+    growToCover(x, y, z);
+    growToCover(x + far, y + far, z + far);
+  }
+  const std::uint64_t cells = std::uint64_t(1) << (3 * level);
+  ++version_;
+  if (level == root_level_) {  // the cube is the root
+    releaseSubtree(words_[0], root_level_);
+    words_[0] = node::uniform(state);
+    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    return;
+  }
+  reserveBlocks(root_level_ - level - 1);
+  std::size_t path[kMaxLevel + 1];
+  path[root_level_] = 0;
+  for (unsigned l = root_level_; l > level + 1; --l) {
+    const NodeWord w = words_[path[l]];
+    const unsigned o = tree_coord::octant(x, y, z, l);
+    if (node::isBitmap(w)) {
+      if (node::state(w, o) == state) return;  // already inside a uniform cube of this state
+      const std::uint32_t block = allocBlock();
+      for (unsigned i = 0; i < 8; ++i) words_[std::size_t(block) * 8 + i] = node::uniform(node::state(w, i));
+      words_[path[l]] = node::reference(block);
+    }
+    path[l - 1] = node::childBase(words_[path[l]]) + o;
+  }
+  const unsigned o = tree_coord::octant(x, y, z, level + 1);
+  const NodeWord parent = words_[path[level + 1]];
+  if (node::isBitmap(parent)) {  // the cube is one of its octants
+    const CellState old = node::state(parent, o);
+    if (old == state) return;
+    if (old != CellState::Unknown) counts_[std::size_t(old)] -= cells;
+    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    words_[path[level + 1]] = node::withState(parent, o, state);
+    if (node::isUniform(words_[path[level + 1]])) collapseFrom(path, level + 1);
+    return;
+  }
+  path[level] = node::childBase(parent) + o;
+  releaseSubtree(words_[path[level]], level);
+  words_[path[level]] = node::uniform(state);
+  if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+  collapseFrom(path, level);
+}
+
+void FastOctTree::releaseSubtree(NodeWord w, unsigned level) {
+  if (node::isBitmap(w)) {
+    for (CellState s : {CellState::Free, CellState::Occupied})
+      counts_[std::size_t(s)] -= std::uint64_t(node::popcount(node::octantMask(w, s))) << (3 * (level - 1));
+    return;
+  }
+  const std::size_t first = node::childBase(w);
+  for (unsigned o = 0; o < 8; ++o) releaseSubtree(words_[first + o], level - 1);
+  freeBlock(node::block(w));
+}
+
 void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {
   max_bytes_ = bytes;
 }

@@ -60,7 +60,9 @@ TEST(FastOccMesh, SameCellsAsTheTreeUnderRandomWrites) {
     const CellState s = CellState(rng() % 3);
     grid.setCell(k, s);
     tree.setCell(k, s);
-    if (i % 7 == 0) ASSERT_EQ(grid.getCell(k), tree.getCell(k));
+    if (i % 7 == 0) {
+      ASSERT_EQ(grid.getCell(k), tree.getCell(k));
+    }
   }
   EXPECT_EQ(grid.getOccupiedCount(), tree.getOccupiedCount());
   EXPECT_EQ(grid.getFreeCount(), tree.getFreeCount());

@@ -326,7 +326,9 @@ TEST(FastOctTree, IterationIsInMortonOrderOfTreeCoordinates) {
   std::size_t cells = 0;
   tree.forEachRegion([&](const Region& r) {
     const auto m = morton(r.min_key);
-    if (!first) EXPECT_GT(m, last);
+    if (!first) {
+      EXPECT_GT(m, last);
+    }
     first = false;
     last = m;
     cells += std::size_t(1) << (3 * r.level);
@@ -457,4 +459,56 @@ TEST(FastOctTree, RegionsInABoxAreThoseThatOverlapIt) {
     stopped_early = visits <= 1;
     EXPECT_TRUE(stopped_early) << "a visitor returning false stops the walk";
   }
+}
+
+TEST(FastOctTree, BoxesAgainstHashModel) {
+  std::mt19937 rng(47);
+  FastOctTree tree(0.1);
+  Model model;
+  // Near the origin, and at the edges of the key range, where the root grows to its full height.
+  const Key centres[] = {{0, 0, 0}, {-37, 12, 5}, {kMaxKey - 30, kMinKey, 3}, {kMinKey, kMinKey, kMinKey},
+                         {kMaxKey - 30, kMaxKey - 30, kMaxKey - 30}};
+  for (int i = 0; i < 3000; ++i) {
+    const Key& c = centres[(i / 300) % 5];
+    Key lo{c.x + std::int32_t(rng() % 24), c.y + std::int32_t(rng() % 24), c.z + std::int32_t(rng() % 24)};
+    Key hi{lo.x + std::int32_t(rng() % 14), lo.y + std::int32_t(rng() % 14), lo.z + std::int32_t(rng() % 14)};
+    hi = Key{std::min(hi.x, kMaxKey), std::min(hi.y, kMaxKey), std::min(hi.z, kMaxKey)};
+    const CellState s = CellState(rng() % 3);
+    if (rng() % 4 == 0) {  // single cells in between, through the accessor's path
+      tree.setCell(lo, s);
+      apply(model, lo, s);
+    } else {
+      tree.setBox(lo, hi, s);
+      for (std::int32_t z = lo.z; z <= hi.z; ++z)
+        for (std::int32_t y = lo.y; y <= hi.y; ++y)
+          for (std::int32_t x = lo.x; x <= hi.x; ++x) apply(model, {x, y, z}, s);
+    }
+    if (i % 250 == 0) checkAgainstModel(tree, model);
+  }
+  checkAgainstModel(tree, model);
+}
+
+TEST(FastOctTree, HugeBoxesCostTheirSurface) {
+  FastOctTree tree(0.1);
+  const Key lo{-200, -210, -190}, hi{311, 301, 321};  // 512³ cells, not aligned
+  tree.setBox(lo, hi, CellState::Free);
+  EXPECT_EQ(tree.getFreeCount(), std::uint64_t(512) * 512 * 512);
+  // Inside, the box collapses; its faces need leaves: about a word per 2x2 patch of its 1.5 M surface cells.
+  EXPECT_LT(tree.getNodeCount(), 1'000'000u) << "a word per maximal cube, not per cell";
+  EXPECT_EQ(tree.getCell(lo), CellState::Free);
+  EXPECT_EQ(tree.getCell(hi), CellState::Free);
+  EXPECT_EQ(tree.getCell({hi.x + 1, 0, 0}), CellState::Unknown);
+  tree.setBox({-10, -10, -10}, {10, 10, 10}, CellState::Occupied);
+  EXPECT_EQ(tree.getOccupiedCount(), 21u * 21 * 21);
+  EXPECT_EQ(tree.getFreeCount(), std::uint64_t(512) * 512 * 512 - 21 * 21 * 21);
+  tree.setBox(lo, hi, CellState::Unknown);
+  EXPECT_TRUE(tree.empty());
+  EXPECT_EQ(tree.getBlockCount(), 0u);
+  EXPECT_EQ(tree.getOccupiedCount() + tree.getFreeCount(), 0u);
+
+  EXPECT_THROW(tree.setBox({0, 0, 0}, {-1, 0, 0}, CellState::Free), std::invalid_argument) << "empty box";
+  EXPECT_THROW(tree.setBox({kMinKey, kMinKey, 0}, {kMaxKey, kMaxKey, 0}, CellState::Free), std::invalid_argument)
+      << "2^60 cells";
+  EXPECT_THROW(tree.setBox({0, 0, 0}, {kMaxKey + 1, 0, 0}, CellState::Free), std::out_of_range);
+  EXPECT_TRUE(tree.empty());
 }

@@ -115,7 +115,7 @@ TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
     icp.setEuclideanFitnessEpsilon(0);
     icp.setMaxCorrespondenceDistance(0.5);
     auto rejector = pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<PointXYZ>>(0.1, 1.0);
-    rejector->setCallback([&](std::size_t, double psi, double m) { mse.push_back(m); });
+    rejector->setCallback([&](std::size_t, double, double m) { mse.push_back(m); });
     icp.addCorrespondenceRejector(rejector);
     if (stop_on_psi) {
       auto criteria = pcl::make_shared<pcl::registration::PsiConvergenceCriteria<float>>(*icp.getConvergeCriteria(),

@@ -10,10 +10,13 @@
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
 
-#include <pcl_fot/io/atomic_file.h>
+#include <pcl_fot/io/file_io.h>
+
 #include "bench/sections.h"
+#include "tool_common.h"
 
 using namespace pcl::console;
+using namespace fot_tools;
 
 namespace {
 
@@ -22,13 +25,14 @@ void printHelp(const char* prog) {
       "Reruns the FastOctTree paper's experiments on real scans, side by side with the baselines,\n"
       "and writes the tables as Markdown.\n\n"
       "Syntax: %s [options]\n\n"
-      "  -data <dir>      directory with the scans of PCL's data repository (default: ../shared/data)\n"
-      "  -out <file>      Markdown report to write (default: doc/benchmarks.md)\n"
-      "  -repeats <n>     insertions per cloud and structure (default: 20, as in the paper)\n"
-      "  -ray_repeats <n> rounds of the ray tracing, search and psi timings (default: 5)\n"
-      "  -dmap_repeats <n> runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
-      "  -sections <list> comma-separated subset of: cells,rays,search,psi (default: all)\n"
-      "  -h               this help\n",
+      "  -data <dir>        directory with the scans of PCL's data repository (default: ../shared/data)\n"
+      "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside it\n"
+      "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
+      "  -ray_repeats <n>   rounds of the ray tracing, search and psi timings (default: 5)\n"
+      "  -dmap_repeats <n>  runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
+      "  -sections <list>   comma-separated subset of: cells,rays,search,psi (default: all)\n"
+      "  -h                 this help\n\n"
+      "Exit codes: 0 done, 1 bad arguments, 2 missing scans or a report that cannot be written.\n",
       prog);
 }
 
@@ -43,25 +47,24 @@ std::string firstLineOf(const char* path, const char* key) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (find_switch(argc, argv, "-h") || find_switch(argc, argv, "--help")) {
-    printHelp(argv[0]);
-    return 0;
-  }
-  std::string data_dir = "../shared/data", out = "doc/benchmarks.md";
-  int repeats = 20, ray_repeats = 5, dmap_repeats = 3;
-  parse_argument(argc, argv, "-data", data_dir);
-  parse_argument(argc, argv, "-out", out);
-  parse_argument(argc, argv, "-repeats", repeats);
-  parse_argument(argc, argv, "-ray_repeats", ray_repeats);
-  parse_argument(argc, argv, "-dmap_repeats", dmap_repeats);
-  std::string sections = "cells,rays,search,psi";
-  parse_argument(argc, argv, "-sections", sections);
-  auto wanted = [&](const std::string& s) { return ("," + sections + ",").find("," + s + ",") != std::string::npos; };
-  if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1) {
-    print_error("-repeats, -ray_repeats and -dmap_repeats must be at least 1\n");
-    return 1;
-  }
-  try {
+  return runTool("fot_bench", [&] {
+    const Arguments args(argc, argv, {"-data", "-out", "-repeats", "-ray_repeats", "-dmap_repeats", "-sections"},
+                         {"-h", "--help"});
+    if (args.has("-h") || args.has("--help")) {
+      printHelp("fot_bench");
+      return kExitOk;
+    }
+    std::string data_dir = "../shared/data", out = "doc/benchmarks.md", sections = "cells,rays,search,psi";
+    int repeats = 20, ray_repeats = 5, dmap_repeats = 3;
+    args.get("-data", data_dir);
+    args.get("-out", out);
+    args.get("-repeats", repeats);
+    args.get("-ray_repeats", ray_repeats);
+    args.get("-dmap_repeats", dmap_repeats);
+    args.get("-sections", sections);
+    if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1)
+      throw ToolError(kExitUsage, "-repeats, -ray_repeats and -dmap_repeats must be at least 1");
+    auto wanted = [&](const std::string& s) { return ("," + sections + ",").find("," + s + ",") != std::string::npos; };
     TicToc total;
     total.tic();
     const auto scans = fot_bench::loadBenchScans(data_dir);
@@ -87,9 +90,6 @@ int main(int argc, char** argv) {
       md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, doc_dir + "/psi_random_maps.png") << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
-  } catch (const std::exception& e) {
-    print_error("fot_bench: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return kExitOk;
+  });
 }

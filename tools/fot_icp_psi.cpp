@@ -6,16 +6,20 @@
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
 #include <pcl/filters/voxel_grid.h>
-#include <pcl/io/pcd_io.h>
 #include <pcl/registration/icp.h>
 
 #include <pcl_fot/registration/correspondence_rejection_psi.h>
 #include <pcl_fot/registration/transformation_validation_psi.h>
 
+#include "tool_common.h"
+
 using namespace pcl::console;
+using namespace fot_tools;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace {
+
+constexpr int kExitNotConverged = 3;
 
 void printHelp(const char* prog) {
   print_info(
@@ -23,7 +27,7 @@ void printHelp(const char* prog) {
       "at every iteration and at convergence, the map similarity psi (mean Manhattan distance per occupied\n"
       "cell, in metres, each cell counting at most -max_range) next to ICP's getFitnessScore (mean squared\n"
       "distance of source points to their nearest target point).\n\n"
-      "Syntax: %s source.pcd target.pcd [options]\n\n"
+      "Syntax: %s source.pcd|.ply target.pcd|.ply [options]\n\n"
       "  -guess <tx,ty,tz,yaw>  initial guess: a rotation of yaw radians about z, then a translation (default: 0,0,0,0)\n"
       "  -leaf <m>              voxel-grid leaf both scans are downsampled with first (default: 0.1; 0: none)\n"
       "  -res <m>               psi's voxel edge (default: 0.1)\n"
@@ -31,19 +35,20 @@ void printHelp(const char* prog) {
       "  -max_corr <m>          ICP's maximum correspondence distance (default: 0.5)\n"
       "  -iterations <n>        ICP's maximum iterations (default: 50)\n"
       "  -h                     this help\n\n"
+      "Exit codes: 0 converged, 1 bad arguments, 2 a file that cannot be read, 3 ICP did not converge.\n\n"
       "Example, PCL's NDT tutorial pair from its initial guess:\n"
       "  %s room_scan2.pcd room_scan1.pcd -guess 1.79387,0.720047,0,0.6931\n",
       prog, prog);
 }
 
-Cloud::Ptr loadScan(const char* file, float leaf) {
-  Cloud::Ptr cloud(new Cloud);
-  if (pcl::io::loadPCDFile(file, *cloud) != 0) throw std::runtime_error(std::string("cannot read ") + file);
+/** ICP's voxel-grid downsampling, NaN points dropped. */
+Cloud::Ptr downsampled(const std::string& file, double leaf) {
+  const Cloud::Ptr cloud = loadCloud(file);
   if (leaf <= 0) return cloud;
   Cloud::Ptr filtered(new Cloud);
   pcl::VoxelGrid<pcl::PointXYZ> grid;
   grid.setInputCloud(cloud);
-  grid.setLeafSize(leaf, leaf, leaf);
+  grid.setLeafSize(float(leaf), float(leaf), float(leaf));
   grid.filter(*filtered);
   return filtered;
 }
@@ -51,35 +56,26 @@ Cloud::Ptr loadScan(const char* file, float leaf) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (find_switch(argc, argv, "-h") || find_switch(argc, argv, "--help")) {
-    printHelp(argv[0]);
-    return 0;
-  }
-  const std::vector<int> files = parse_file_extension_argument(argc, argv, ".pcd");
-  if (files.size() != 2) {
-    print_error("fot_icp_psi: expected a source and a target .pcd file (see -h)\n");
-    return 1;
-  }
-  std::vector<float> guess{0, 0, 0, 0};
-  if (find_argument(argc, argv, "-guess") >= 0 && parse_x_arguments(argc, argv, "-guess", guess) < 0) {
-    print_error("fot_icp_psi: -guess takes tx,ty,tz,yaw\n");
-    return 1;
-  }
-  if (guess.size() != 4) {
-    print_error("fot_icp_psi: -guess takes four numbers: tx,ty,tz,yaw\n");
-    return 1;
-  }
-  float leaf = 0.1f;
-  double res = 0.1, max_range = 1.0, max_corr = 0.5;
-  int iterations = 50;
-  parse_argument(argc, argv, "-leaf", leaf);
-  parse_argument(argc, argv, "-res", res);
-  parse_argument(argc, argv, "-max_range", max_range);
-  parse_argument(argc, argv, "-max_corr", max_corr);
-  parse_argument(argc, argv, "-iterations", iterations);
-
-  try {
-    const Cloud::Ptr source = loadScan(argv[files[0]], leaf), target = loadScan(argv[files[1]], leaf);
+  return runTool("fot_icp_psi", [&] {
+    const Arguments args(argc, argv, {"-guess", "-leaf", "-res", "-max_range", "-max_corr", "-iterations"},
+                         {"-h", "--help"});
+    if (args.has("-h") || args.has("--help")) {
+      printHelp("fot_icp_psi");
+      return kExitOk;
+    }
+    if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected a source and a target point cloud (see -h)");
+    std::vector<double> guess{0, 0, 0, 0};
+    args.get("-guess", guess, 4);
+    double leaf = 0.1, res = 0.1, max_range = 1.0, max_corr = 0.5;
+    int iterations = 50;
+    if (args.get("-leaf", leaf) && leaf < 0) throw ToolError(kExitUsage, "option -leaf must not be negative");
+    args.getPositive("-res", res);
+    args.getPositive("-max_range", max_range);
+    args.getPositive("-max_corr", max_corr);
+    if (args.get("-iterations", iterations) && iterations < 1)
+      throw ToolError(kExitUsage, "option -iterations must be at least 1");
+    const Cloud::Ptr source = downsampled(args.positional()[0], leaf),
+                     target = downsampled(args.positional()[1], leaf);
     const Eigen::Matrix4f initial = (Eigen::Translation3f(guess[0], guess[1], guess[2]) *
                                      Eigen::AngleAxisf(guess[3], Eigen::Vector3f::UnitZ()))
                                         .matrix();
@@ -115,9 +111,6 @@ int main(int argc, char** argv) {
     for (int r = 0; r < 4; ++r)
       print_info("  %10.6f %10.6f %10.6f %10.6f\n", final_pose(r, 0), final_pose(r, 1), final_pose(r, 2),
                  final_pose(r, 3));
-    return icp.hasConverged() ? 0 : 2;
-  } catch (const std::exception& e) {
-    print_error("fot_icp_psi: %s\n", e.what());
-    return 1;
-  }
+    return icp.hasConverged() ? kExitOk : kExitNotConverged;
+  });
 }

@@ -1,94 +1,158 @@
-// fot_map: builds a FastOctTree map from range scans and writes it for pcl_viewer.
+// fot_map: builds a FastOctTree map from range scans with ray tracing; writes it as .fot and for pcl_viewer.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
-#include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
-#include <pcl/io/pcd_io.h>
 
 #include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/voxel_export.h>
 #include <pcl_fot/occupancy_mapping.h>
 
 #include "synthetic_scene.h"
+#include "tool_common.h"
 
 using namespace pcl::console;
+using namespace fot_tools;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace {
 
 void printHelp(const char* prog) {
   print_info(
-      "Builds a FastOctTree occupancy map from range scans with ray tracing (free space along every ray,\n"
-      "occupied endpoints) and writes its occupied voxel centres as a PCD file for pcl_viewer. Each scan is\n"
-      "placed by its VIEWPOINT (sensor pose). Without scans, it maps the embedded default: a synthetic\n"
-      "furnished room seen by a depth camera from six poses.\n\n"
-      "Syntax: %s [options] [scan1.pcd scan2.pcd ...]\n\n"
-      "  -res <m>        voxel edge length in metres (default: 0.05)\n"
-      "  -out <prefix>   output prefix (default: fot_map); writes <prefix>_occupied.pcd\n"
-      "  -h              this help\n",
+      "Builds a FastOctTree occupancy map from range scans with ray tracing: the cells along every ray\n"
+      "become free, the endpoints occupied. Each scan's pose (sensor in the map frame) is its VIEWPOINT,\n"
+      "or a line of the pose file. Without scans, it maps the embedded default: a synthetic furnished room\n"
+      "seen by a depth camera from six poses.\n\n"
+      "Syntax: %s [options] [scan1.pcd|.ply scan2.pcd ...]\n\n"
+      "  -res <m>          voxel edge length in metres (default: 0.05)\n"
+      "  -poses <file>     one pose per scan, in order: tx ty tz qw qx qy qz per line ('#' comments)\n"
+      "  -max_range <m>    rays longer than this mark free space up to it and no endpoint (default: none)\n"
+      "  -min_range <m>    points closer to the sensor are ignored (default: 0)\n"
+      "  -out <prefix>     output prefix (default: fot_map); writes <prefix>.fot, <prefix>_occupied.pcd\n"
+      "                    (voxel centres coloured by height) and <prefix>_mesh.vtk (voxel cubes)\n"
+      "  -free             also write <prefix>_states.pcd: occupied and free voxel centres, coloured by state\n"
+      "  -h                this help\n\n"
+      "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read or written.\n",
       prog);
+}
+
+/** Poses from a file: tx ty tz qw qx qy qz per line, as a PCD VIEWPOINT. */
+std::vector<Eigen::Affine3f> readPoses(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ToolError(kExitInput, "cannot read the pose file '" + path + "'");
+  std::vector<Eigen::Affine3f> poses;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::size_t hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    std::istringstream fields(line);
+    std::vector<std::string> tokens;
+    for (std::string t; fields >> t;) tokens.push_back(t);
+    if (tokens.empty()) continue;
+    double v[7];
+    bool ok = tokens.size() == 7;
+    for (std::size_t i = 0; ok && i < 7; ++i) {
+      char* end = nullptr;
+      v[i] = std::strtod(tokens[i].c_str(), &end);
+      ok = *end == '\0' && std::isfinite(v[i]);
+    }
+    if (!ok) throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": expected 7 numbers: tx ty tz qw qx qy qz");
+    const Eigen::Quaternionf q{float(v[3]), float(v[4]), float(v[5]), float(v[6])};
+    if (!(q.norm() > 1e-6f)) throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": a zero quaternion");
+    poses.push_back(Eigen::Translation3f(float(v[0]), float(v[1]), float(v[2])) * q.normalized());
+  }
+  return poses;
+}
+
+void progress(std::size_t done, std::size_t total, double seconds) {
+  const int width = 30, filled = int(width * done / (total ? total : 1));
+  std::fprintf(stderr, "\r[%s%s] %zu/%zu scans, %.1f s", std::string(std::size_t(filled), '=').c_str(),
+               std::string(std::size_t(width - filled), ' ').c_str(), done, total, seconds);
+  if (done == total) std::fprintf(stderr, "\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (find_switch(argc, argv, "-h") || find_switch(argc, argv, "--help")) {
-    printHelp(argv[0]);
-    return 0;
-  }
-  double res = 0.05;
-  std::string out = "fot_map";
-  parse_argument(argc, argv, "-res", res);
-  parse_argument(argc, argv, "-out", out);
-  const std::vector<int> files = parse_file_extension_argument(argc, argv, ".pcd");
+  return runTool("fot_map", [&] {
+    const Arguments args(argc, argv, {"-res", "-poses", "-max_range", "-min_range", "-out"}, {"-free", "-h", "--help"});
+    if (args.has("-h") || args.has("--help")) {
+      printHelp("fot_map");
+      return kExitOk;
+    }
+    double res = 0.05;
+    std::string out = "fot_map", pose_file;
+    pcl::fot::ScanOptions options;
+    args.getPositive("-res", res);
+    args.getPositive("-max_range", options.max_range);
+    if (args.get("-min_range", options.min_range) && options.min_range < 0)
+      throw ToolError(kExitUsage, "option -min_range must not be negative");
+    args.get("-out", out);
+    const bool with_poses = args.get("-poses", pose_file);
 
-  try {
     TicToc timer;
     timer.tic();
     std::vector<Cloud::Ptr> scans;
-    if (files.empty()) {
+    if (args.positional().empty()) {
       print_info("No scans given: mapping the embedded synthetic room.\n");
-      scans = fot_tools::scanSyntheticRoom();
+      scans = scanSyntheticRoom();
     }
-    for (int i : files) {
-      Cloud::Ptr cloud(new Cloud);
-      if (pcl::io::loadPCDFile(argv[i], *cloud) != 0) {
-        print_error("Cannot read %s\n", argv[i]);
-        return 1;
-      }
-      scans.push_back(cloud);
+    for (const std::string& file : args.positional()) scans.push_back(loadCloud(file));
+    std::vector<Eigen::Affine3f> poses;
+    if (with_poses) {
+      poses = readPoses(pose_file);
+      if (poses.size() != scans.size())
+        throw ToolError(kExitInput, "the pose file has " + std::to_string(poses.size()) + " poses for " +
+                                        std::to_string(scans.size()) + " scans");
     }
 
     pcl::fot::FastOctTree tree(res);
     pcl::fot::ScanStats total;
-    for (const auto& scan : scans) {
-      const pcl::fot::ScanStats st = pcl::fot::insertScan(tree, *scan);
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      progress(i, scans.size(), timer.toc() / 1000.0);
+      const pcl::fot::ScanStats st = with_poses ? pcl::fot::insertScan(tree, *scans[i], poses[i], options)
+                                                : pcl::fot::insertScan(tree, *scans[i], options);
       total.rays += st.rays;
       total.non_finite += st.non_finite;
       total.out_of_range += st.out_of_range;
       total.ray_cells += st.ray_cells;
     }
-    const std::string occupied_file = out + "_occupied.pcd";
-    const std::size_t written = pcl::fot::io::saveVoxelCentersPCD(tree, occupied_file);
+    progress(scans.size(), scans.size(), timer.toc() / 1000.0);
+
+    const std::string map_file = out + ".fot", centres_file = out + "_occupied.pcd", mesh_file = out + "_mesh.vtk";
+    pcl::fot::io::saveFot(tree, map_file);
+    const std::size_t centres = pcl::fot::io::saveVoxelCentersPCD(tree, centres_file);
+    const std::size_t faces = pcl::fot::io::saveVoxelMeshVTK(tree, mesh_file);
 
     print_info("Map summary\n");
     print_info("  scans              %zu\n", scans.size());
-    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n",
-               total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
+    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n", total.rays,
+               (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
     print_info("  resolution         %g m\n", tree.getResolution());
     print_info("  depth              %u levels\n", tree.getDepth());
     print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
     print_info("  free cells         %llu\n", (unsigned long long)tree.getFreeCount());
     print_info("  node words         %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
     print_info("  memory             %zu bytes\n", tree.getMemoryBytes());
-    print_info("Wrote %zu voxel centres to %s (open it with: pcl_viewer %s)\n", written,
-               occupied_file.c_str(), occupied_file.c_str());
+    print_info("Wrote %s (the map), %s (%zu voxel centres) and %s (%zu faces)\n", map_file.c_str(),
+               centres_file.c_str(), centres, mesh_file.c_str(), faces);
+    if (args.has("-free")) {
+      pcl::fot::io::VoxelExportOptions free_only;
+      free_only.include_free = true;
+      free_only.coloring = pcl::fot::io::VoxelColoring::State;
+      const std::string free_file = out + "_states.pcd";
+      print_info("Wrote %s (%zu voxel centres, occupied and free)\n", free_file.c_str(),
+                 pcl::fot::io::saveVoxelCentersPCD(tree, free_file, free_only));
+    }
+    print_info("View them with: pcl_viewer %s   or   pcl_viewer %s\n", centres_file.c_str(), mesh_file.c_str());
     print_info("Done in %.0f ms\n", timer.toc());
-  } catch (const std::exception& e) {
-    print_error("fot_map: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return kExitOk;
+  });
 }

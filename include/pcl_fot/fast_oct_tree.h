@@ -74,6 +74,15 @@ class FastOctTree {
   void setCellAtPoint(double x, double y, double z, CellState state);
   void eraseCellAtPoint(double x, double y, double z) { setCellAtPoint(x, y, z, CellState::Unknown); }
 
+  /**
+   * Sets every cell of the key box [lo, hi] (inclusive on each axis) to `state`. The box is split into
+   * maximal aligned cubes, each written as one word, so time and memory grow with the box's surface, not
+   * its volume (setMaxMemoryBytes bounds them). Throws std::out_of_range for keys beyond the range, and
+   * std::invalid_argument for an empty box (lo above hi on an axis) or one of 2^60 cells or more (the cell
+   * counts are 64-bit). MemoryLimitError past the pool cap leaves the cubes written until then.
+   */
+  void setBox(const Key& lo, const Key& hi, CellState state);
+
   /** Writes every valid key; invalid keys are skipped and counted. */
   InsertStats insertKeys(const Key* keys, std::size_t count, CellState state = CellState::Occupied,
                          bool line_burst = true);
@@ -124,6 +133,28 @@ class FastOctTree {
   bool operator==(const FastOctTree& other) const;
   bool operator!=(const FastOctTree& other) const { return !(*this == other); }
 
+  /**
+   * The tree as the .fot format stores it (io/fot_file.h). The root is the smallest cube holding every
+   * known cell. Block 0 holds the root word and seven zero words; the referenced blocks follow in
+   * depth-first pre-order, each reference renumbered. Equal trees give equal pools, word for word.
+   */
+  struct CanonicalPool {
+    unsigned root_level = 1;
+    std::array<std::uint32_t, 3> root_base{};  ///< tree coordinates
+    std::vector<NodeWord> words;
+  };
+  CanonicalPool canonicalPool() const;
+
+  /**
+   * The tree a canonical pool describes, checked in full before it is built: the root's level and
+   * alignment, block 0's padding, every reference (to the next block in pre-order, never from level 1, no
+   * block left over), every bitmap (spare bits clear, no invalid state), canonical form (no block of 8
+   * uniform words, a minimal root), every known cell within the key range, and the pool's size against
+   * max_bytes. Throws std::invalid_argument naming the first violation.
+   */
+  static FastOctTree fromCanonicalPool(const VoxelGrid& grid, CanonicalPool pool,
+                                       std::size_t max_bytes = std::numeric_limits<std::size_t>::max());
+
   /** Low-level read access, for algorithms built on the tree (search, ψ, io). */
   NodeWord rootWord() const { return words_[0]; }
   unsigned rootLevel() const { return root_level_; }
@@ -154,6 +185,10 @@ class FastOctTree {
   void expandTo(std::size_t* path, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z);
   /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
   unsigned collapseFrom(const std::size_t* path, unsigned level);
+  /** Writes the aligned cube of 2^level cells per axis whose corner is (x, y, z), tree coordinates. */
+  void setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, CellState state);
+  /** Frees the blocks below word w, of level `level`, and takes its cells out of the counts. */
+  void releaseSubtree(NodeWord w, unsigned level);
 
   /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
   template <typename Visitor>

@@ -11,7 +11,7 @@
 #include <nanoflann.hpp>
 
 #include <pcl_fot/distance_map.h>
-#include <pcl_fot/io/atomic_file.h>
+#include <pcl_fot/io/file_io.h>
 #include <pcl_fot/point_cloud_insertion.h>
 #include <pcl_fot/psi.h>
 

@@ -26,6 +26,13 @@ struct VoxelExportOptions {
 std::size_t saveVoxelCentersPCD(const FastOctTree& tree, const std::string& path,
                                 const VoxelExportOptions& options = {});
 
+/**
+ * Writes the voxels as a surface mesh of cubes, a binary legacy VTK file that pcl_viewer opens: one quad
+ * per face between an exported voxel and one that is not (inner faces are left out), coloured per point.
+ * The write is atomic. Returns the number of faces; throws as saveVoxelCentersPCD.
+ */
+std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path, const VoxelExportOptions& options = {});
+
 }  // namespace io
 }  // namespace fot
 }  // namespace pcl

@@ -1,8 +1,9 @@
-#include <pcl_fot/io/atomic_file.h>
+#include <pcl_fot/io/file_io.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 #include <fcntl.h>
@@ -45,6 +46,20 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
     std::remove(tmp.c_str());
     fail("rename to", path, err);
   }
+}
+
+std::string readFile(const std::string& path, std::size_t max_bytes) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) fail("open", path, errno);
+  const std::streamoff size = in.tellg();
+  if (size < 0) fail("read", path, errno);
+  if (std::uint64_t(size) > max_bytes)
+    throw std::length_error("pcl::fot::io: '" + path + "' has " + std::to_string(size) + " bytes, more than the " +
+                            std::to_string(max_bytes) + " a valid file of its kind can have here");
+  std::string bytes(std::size_t(size), '\0');
+  in.seekg(0);
+  if (!in.read(&bytes[0], size)) fail("read", path, errno);
+  return bytes;
 }
 
 }  // namespace io

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 namespace pcl {
@@ -12,6 +13,12 @@ namespace io {
  * Throws std::runtime_error with the system's reason on failure; the temporary file is removed.
  */
 void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+/**
+ * The whole content of a file. Throws std::runtime_error if it cannot be read, and std::length_error,
+ * before reading, if it is larger than max_bytes.
+ */
+std::string readFile(const std::string& path, std::size_t max_bytes);
 
 }  // namespace io
 }  // namespace fot

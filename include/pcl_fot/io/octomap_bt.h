@@ -1,0 +1,49 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/io/fot_file.h>
+
+namespace pcl {
+namespace fot {
+namespace io {
+
+/**
+ * OctoMap's binary .bt format (maximum-likelihood occupancy), read and written without the OctoMap
+ * library. OctoMap's grid has its cell boundaries on multiples of the resolution and 65536 cells per axis
+ * centred on coordinate 0: key K = floor(c / res) + 32768. A map is representable when its origin lies on
+ * that grid (a whole number of cells from 0 on each axis) and its known cells lie within that cube; the
+ * free and occupied cells are then carried over exactly. OctoMap's log-odds are not: a .bt holds
+ * maximum-likelihood states only, as this map does.
+ */
+
+/** The .bt bytes of a tree. Throws std::invalid_argument, saying why, if the map is not representable. */
+std::string encodeBt(const FastOctTree& tree);
+
+/** Writes a .bt file atomically. Throws as encodeBt, and std::runtime_error on I/O errors. */
+void saveBt(const FastOctTree& tree, const std::string& path);
+
+struct BtImportOptions {
+  /** Origin of the map to build; it must lie on OctoMap's grid (a whole number of cells from 0). */
+  double origin[3] = {0.0, 0.0, 0.0};
+  /** The map may not grow beyond this: a hostile file gets MemoryLimitError, not all the memory. */
+  std::size_t max_pool_bytes = kDefaultMaxPoolBytes;
+};
+
+/**
+ * The map in .bt bytes, with OctoMap's cells: its resolution from the header, the origin from the options.
+ * Throws FormatError, prefixed with `name`, for a malformed file (bad header, truncated or excess body, a
+ * node count that disagrees with the header), std::invalid_argument for an origin off OctoMap's grid, and
+ * MemoryLimitError beyond the cap.
+ */
+FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name = "<memory>",
+                     const BtImportOptions& options = {});
+
+/** Reads a .bt file; throws as decodeBt, and std::runtime_error when it cannot be read. */
+FastOctTree loadBt(const std::string& path, const BtImportOptions& options = {});
+
+}  // namespace io
+}  // namespace fot
+}  // namespace pcl

@@ -1,0 +1,196 @@
+// The .fot format: bit-identical round trips, and a clear error for every damaged or hostile file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+
+#include <boost/crc.hpp>
+#include <unistd.h>
+
+#include <pcl_fot/io/fot_file.h>
+#include <pcl_fot/occupancy_mapping.h>
+
+#include "scan_data.h"
+
+using namespace pcl::fot;
+
+namespace {
+
+/** room_scan1 ray-traced at 5 cm: free space in collapsed regions of many sizes, and occupied walls. */
+const FastOctTree& realMap() {
+  static const FastOctTree map = [] {
+    FastOctTree t(0.05);
+    insertScan(t, *pcl_fot_test::loadScan("room_scan1.pcd"));
+    return t;
+  }();
+  return map;
+}
+
+std::string tempPath(const std::string& name) {
+  return ::testing::TempDir() + "pcl_fot_" + std::to_string(::getpid()) + "_" + name;
+}
+
+void put32(std::string& bytes, std::size_t at, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) bytes[at + i] = char((v >> (8 * i)) & 0xFF);
+}
+void put64(std::string& bytes, std::size_t at, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) bytes[at + i] = char((v >> (8 * i)) & 0xFF);
+}
+/** Recomputes the trailing CRC, so that a deliberate change reaches the checks behind it. */
+void reseal(std::string& bytes) {
+  boost::crc_32_type crc;
+  crc.process_bytes(bytes.data(), bytes.size() - 4);
+  put32(bytes, bytes.size() - 4, crc.checksum());
+}
+
+/** Decodes `bytes`, expecting a FormatError whose message contains `why`. */
+void expectRejected(const std::string& bytes, const std::string& why) {
+  try {
+    io::decodeFot(bytes.data(), bytes.size(), "test.fot");
+    ADD_FAILURE() << "accepted a file that should fail with: " << why;
+  } catch (const io::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("test.fot"), std::string::npos) << "the message names the file";
+  }
+}
+
+}  // namespace
+
+TEST(FotFile, RoundTripIsBitIdentical) {
+  const FastOctTree& map = realMap();
+  ASSERT_GT(map.getFreeCount(), 0u);
+  const std::string bytes = io::encodeFot(map);
+  const FastOctTree back = io::decodeFot(bytes.data(), bytes.size());
+  EXPECT_TRUE(back == map);
+  EXPECT_EQ(back.getGrid(), map.getGrid());
+  EXPECT_EQ(io::encodeFot(back), bytes);
+
+  const std::string path = tempPath("round_trip.fot");
+  io::saveFot(map, path);
+  io::saveFot(map, path);  // over an existing file
+  const FastOctTree loaded = io::loadFot(path);
+  EXPECT_TRUE(loaded == map);
+  EXPECT_EQ(io::encodeFot(loaded), bytes);
+  std::remove(path.c_str());
+}
+
+TEST(FotFile, GridAndEmptyMapsSurvive) {
+  FastOctTree odd(0.037, 0.123456789, -17.5, 1e-9);
+  odd.setCell({-3, 4, 1000}, CellState::Free);
+  const std::string bytes = io::encodeFot(odd);
+  const FastOctTree back = io::decodeFot(bytes.data(), bytes.size());
+  EXPECT_TRUE(back == odd);
+  EXPECT_EQ(back.getResolution(), 0.037);
+  EXPECT_EQ(back.getGrid().origin()[0], 0.123456789);
+  const FastOctTree empty(0.2);
+  const std::string e = io::encodeFot(empty);
+  EXPECT_EQ(e.size(), 96u + 32u + 4u);
+  EXPECT_TRUE(io::decodeFot(e.data(), e.size()).empty());
+}
+
+TEST(FotFile, EveryHeaderFieldIsChecked) {
+  FastOctTree small(0.1);
+  for (int i = 0; i < 50; ++i) small.setCell({i % 7, i / 7, i % 3}, CellState::Occupied);
+  const std::string good = io::encodeFot(small);
+  std::string b;
+
+  expectRejected("", "magic");
+  expectRejected(good.substr(0, 40), "ends inside the header");
+  b = good;
+  b[1] = 'X';
+  expectRejected(b, "magic");
+  b = good;
+  put32(b, 8, 2);
+  expectRejected(b, "version 2");
+  b = good;
+  put32(b, 12, 128);
+  expectRejected(b, "header of 128 bytes");
+  b = good;
+  put64(b, 16, 0);
+  reseal(b);
+  expectRejected(b, "resolution");
+  b = good;
+  const double nan = std::nan("");
+  std::uint64_t bits;
+  std::memcpy(&bits, &nan, 8);
+  put64(b, 24, bits);
+  reseal(b);
+  expectRejected(b, "origin");
+  b = good;
+  put64(b, 72, std::uint64_t(1) << 40);
+  expectRejected(b, "blocks");
+  b = good;
+  put64(b, 64, 5);
+  expectRejected(b, "node count");
+  b = good;
+  put64(b, 72, std::uint64_t(1) << 30);  // 32 GiB claimed: refused by size, nothing allocated
+  put64(b, 64, 1 + 8 * (std::uint64_t(1) << 30));
+  expectRejected(b, "cap");
+  b = good;
+  b.pop_back();
+  expectRejected(b, "truncated");
+  b = good + "x";
+  expectRejected(b, "trailing bytes");
+  b = good;
+  b[100] ^= 0x40;
+  expectRejected(b, "checksum");
+  b = good;
+  put64(b, 80, small.getOccupiedCount() + 1);
+  reseal(b);
+  expectRejected(b, "cell counts");
+  b = good;
+  put32(b, 48, 0);
+  reseal(b);
+  expectRejected(b, "root level");
+  b = good;
+  put32(b, 96 + 4 * 9, 0x10u | node::uniform(CellState::Free));  // a spare bit in a pool word
+  reseal(b);
+  expectRejected(b, "spare bits");
+  EXPECT_THROW(io::decodeFot(good.data(), good.size(), "test.fot", 64), io::FormatError) << "the caller's cap";
+}
+
+TEST(FotFile, ThousandsOfDamagedFilesFailCleanlyOrLoadValidMaps) {
+  const std::string good = io::encodeFot(realMap());
+  std::mt19937 rng(2007);
+  int refused = 0, loaded = 0;
+  auto attempt = [&](const std::string& bytes) {
+    try {
+      const FastOctTree t = io::decodeFot(bytes.data(), bytes.size(), "damaged.fot");
+      // Whatever loads is a valid canonical map: it encodes back to exactly the bytes it came from.
+      EXPECT_EQ(io::encodeFot(t), bytes);
+      ++loaded;
+    } catch (const io::FormatError&) {
+      ++refused;
+    }
+  };
+  for (int i = 0; i < 400; ++i) attempt(good.substr(0, rng() % good.size()));  // truncated
+  for (int i = 0; i < 400; ++i) {                                              // bit flips
+    std::string b = good;
+    for (unsigned n = 1 + rng() % 4; n > 0; --n) b[rng() % b.size()] ^= char(1u << (rng() % 8));
+    attempt(b);
+  }
+  for (int i = 0; i < 400; ++i) {  // flips in the header or pool behind a valid checksum: hostile, not damaged
+    std::string b = good;
+    const std::size_t at = rng() % 2 ? 8 + rng() % 88 : 96 + rng() % (b.size() - 100);
+    b[at] ^= char(1u << (rng() % 8));
+    reseal(b);
+    attempt(b);
+  }
+  EXPECT_EQ(refused + loaded, 1200);
+  EXPECT_GT(refused, 1100);
+}
+
+TEST(FotFile, FilesThatCannotBeReadOrAreHuge) {
+  EXPECT_THROW(io::loadFot(tempPath("missing.fot")), std::runtime_error);
+  const std::string path = tempPath("huge.fot");
+  {
+    FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    ASSERT_EQ(::ftruncate(fileno(f), (off_t(5) << 30) + 100), 0);  // sparse: takes no disk
+    std::fclose(f);
+  }
+  EXPECT_THROW(io::loadFot(path), io::FormatError) << "refused by its size, before reading";
+  std::remove(path.c_str());
+}

@@ -1,0 +1,104 @@
+// fot_convert: converts maps between .fot, OctoMap .bt, voxel-centre .pcd and .vtk cube meshes.
+#include <string>
+
+#include <pcl/console/print.h>
+#include <pcl/console/time.h>
+
+#include <pcl_fot/io/fot_file.h>
+#include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/voxel_export.h>
+#include <pcl_fot/point_cloud_insertion.h>
+
+#include "tool_common.h"
+
+using namespace pcl::console;
+using namespace fot_tools;
+
+namespace {
+
+void printHelp(const char* prog) {
+  print_info(
+      "Converts a map, or builds one from a point cloud, by the files' extensions.\n\n"
+      "Syntax: %s input output [options]\n\n"
+      "  input   .fot (pcl_fot map), .bt (OctoMap binary map), or .pcd / .ply (a point cloud: its points\n"
+      "          become occupied cells, no ray tracing; needs -res)\n"
+      "  output  .fot, .bt, .pcd (voxel centres for pcl_viewer) or .vtk (voxel cube mesh for pcl_viewer)\n\n"
+      "  -res <m>            voxel edge for a point cloud input\n"
+      "  -origin <x,y,z>     map origin for a point cloud or .bt input (default: 0,0,0); for .bt, a whole\n"
+      "                      number of cells from 0 on each axis\n"
+      "  -free               .pcd and .vtk outputs: free voxels as well as occupied ones\n"
+      "  -color <mode>       .pcd and .vtk outputs: height (default), state, or none (.pcd only)\n"
+      "  -h                  this help\n\n"
+      "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read, is not valid, or cannot be\n"
+      "written, or a map the output format cannot hold.\n",
+      prog);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return runTool("fot_convert", [&] {
+    const Arguments args(argc, argv, {"-res", "-origin", "-color"}, {"-free", "-h", "--help"});
+    if (args.has("-h") || args.has("--help")) {
+      printHelp("fot_convert");
+      return kExitOk;
+    }
+    if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected an input and an output file (see -h)");
+    const std::string &input = args.positional()[0], &output = args.positional()[1];
+    const std::string out_ext = extension(output);
+    if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".pcd" && out_ext != ".vtk")
+      throw ToolError(kExitUsage, "cannot write '" + output + "': the output must be .fot, .bt, .pcd or .vtk");
+    std::vector<double> origin{0, 0, 0};
+    args.get("-origin", origin, 3);
+    pcl::fot::io::VoxelExportOptions exported;
+    exported.include_free = args.has("-free");
+    std::string color = "height";
+    args.get("-color", color);
+    if (color == "height")
+      exported.coloring = pcl::fot::io::VoxelColoring::Height;
+    else if (color == "state")
+      exported.coloring = pcl::fot::io::VoxelColoring::State;
+    else if (color == "none" && out_ext == ".pcd")
+      exported.coloring = pcl::fot::io::VoxelColoring::None;
+    else
+      throw ToolError(kExitUsage, "option -color takes height, state or none (.pcd only)");
+
+    TicToc timer;
+    timer.tic();
+    const std::string in_ext = extension(input);
+    pcl::fot::FastOctTree tree(1.0);
+    if (in_ext == ".pcd" || in_ext == ".ply") {
+      double res = 0;
+      if (!args.getPositive("-res", res)) throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
+      const auto cloud = loadCloud(input);
+      tree = pcl::fot::FastOctTree(pcl::fot::VoxelGrid(res, origin[0], origin[1], origin[2]));
+      const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
+      print_info("Inserted %zu points (skipped %zu NaN/Inf, %zu out of range)\n", st.inserted, st.non_finite,
+                 st.out_of_range);
+    } else if (in_ext == ".bt") {
+      pcl::fot::io::BtImportOptions options;
+      std::copy(origin.begin(), origin.end(), options.origin);
+      tree = pcl::fot::io::loadBt(input, options);
+    } else if (in_ext == ".fot") {
+      tree = pcl::fot::io::loadFot(input);
+    } else {
+      throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .pcd or .ply");
+    }
+
+    std::string what;
+    if (out_ext == ".fot") {
+      pcl::fot::io::saveFot(tree, output);
+      what = "map";
+    } else if (out_ext == ".bt") {
+      pcl::fot::io::saveBt(tree, output);
+      what = "OctoMap map";
+    } else if (out_ext == ".pcd") {
+      what = std::to_string(pcl::fot::io::saveVoxelCentersPCD(tree, output, exported)) + " voxel centres";
+    } else {
+      what = std::to_string(pcl::fot::io::saveVoxelMeshVTK(tree, output, exported)) + " cube faces";
+    }
+    print_info("Wrote %s (%s: %llu occupied, %llu free cells) in %.0f ms\n", output.c_str(), what.c_str(),
+               (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(), timer.toc());
+    return kExitOk;
+  });
+}

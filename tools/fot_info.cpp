@@ -1,0 +1,66 @@
+// fot_info: what a map holds: grid, extent, depth, cells by state, nodes and bytes.
+#include <algorithm>
+#include <string>
+
+#include <pcl/console/print.h>
+
+#include "tool_common.h"
+
+using namespace pcl::console;
+using namespace fot_tools;
+
+namespace {
+
+void printHelp(const char* prog) {
+  print_info(
+      "Prints what maps hold: resolution, origin, the extent of their known cells, depth, cell counts by\n"
+      "state, node words and bytes.\n\n"
+      "Syntax: %s map.fot|map.bt [more maps ...]\n\n"
+      "  -h   this help\n\n"
+      "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read or is not a valid map.\n",
+      prog);
+}
+
+void describe(const std::string& path) {
+  const pcl::fot::FastOctTree tree = loadMap(path);
+  const pcl::fot::VoxelGrid& grid = tree.getGrid();
+  print_info("%s\n", path.c_str());
+  print_info("  resolution      %.17g m\n", grid.resolution());
+  print_info("  origin          %.17g %.17g %.17g\n", grid.origin()[0], grid.origin()[1], grid.origin()[2]);
+  if (tree.empty()) {
+    print_info("  extent          empty\n");
+  } else {
+    pcl::fot::Key lo{pcl::fot::kMaxKey, pcl::fot::kMaxKey, pcl::fot::kMaxKey};
+    pcl::fot::Key hi{pcl::fot::kMinKey, pcl::fot::kMinKey, pcl::fot::kMinKey};
+    tree.forEachRegion([&](const pcl::fot::Region& r) {
+      const std::int32_t last = std::int32_t((std::int64_t(1) << r.level) - 1);
+      lo = {std::min(lo.x, r.min_key.x), std::min(lo.y, r.min_key.y), std::min(lo.z, r.min_key.z)};
+      hi = {std::max(hi.x, r.min_key.x + last), std::max(hi.y, r.min_key.y + last), std::max(hi.z, r.min_key.z + last)};
+    });
+    const double res = grid.resolution();
+    print_info("  extent (keys)   %d %d %d  to  %d %d %d\n", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    print_info("  extent (m)      %.3f %.3f %.3f  to  %.3f %.3f %.3f\n", grid.origin()[0] + lo.x * res,
+               grid.origin()[1] + lo.y * res, grid.origin()[2] + lo.z * res, grid.origin()[0] + (hi.x + 1) * res,
+               grid.origin()[1] + (hi.y + 1) * res, grid.origin()[2] + (hi.z + 1) * res);
+  }
+  print_info("  depth           %u levels\n", tree.getDepth());
+  print_info("  occupied cells  %llu\n", (unsigned long long)tree.getOccupiedCount());
+  print_info("  free cells      %llu\n", (unsigned long long)tree.getFreeCount());
+  print_info("  node words      %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
+  print_info("  bytes           %zu in memory\n", tree.getMemoryBytes());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return runTool("fot_info", [&] {
+    const Arguments args(argc, argv, {}, {"-h", "--help"});
+    if (args.has("-h") || args.has("--help")) {
+      printHelp("fot_info");
+      return kExitOk;
+    }
+    if (args.positional().empty()) throw ToolError(kExitUsage, "expected one or more .fot or .bt maps (see -h)");
+    for (const std::string& path : args.positional()) describe(path);
+    return kExitOk;
+  });
+}
