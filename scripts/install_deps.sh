@@ -10,6 +10,7 @@ packages=(
   liboctomap-dev libnanoflann-dev libbenchmark-dev  # reference peers for tests and benchmarks
   xvfb x11-apps imagemagick libgl1-mesa-dri         # pcl_viewer screenshots: virtual display, software GL
   gnuplot-nox                                       # benchmark plots
+  clang libclang-rt-14-dev                          # libFuzzer for the fuzz targets
 )
 
 missing=()

@@ -133,10 +133,11 @@ void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, uns
       return;
     }
     const std::uint32_t far = (std::uint32_t(1) << level) - 1;
-    growToCover(x, y, z);
-    growToCover(x + far, y + far, z + far);
+    for (const std::uint32_t c : {std::uint32_t(0), far})  // both corners: the root must hold the whole cube
+      if (empty() || (((x + c) ^ base_[0]) | ((y + c) ^ base_[1]) | ((z + c) ^ base_[2])) >> root_level_)
+        growToCover(x + c, y + c, z + c);
   }
-  const std::uint64_t cells = std::uint64_t(1) << (3 * level);
+  const std::uint64_t cells = node::cellsIn(1, level);
   ++version_;
   if (level == root_level_) {  // the cube is the root
     releaseSubtree(words_[0], root_level_);
@@ -179,7 +180,7 @@ void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, uns
 void FastOctTree::releaseSubtree(NodeWord w, unsigned level) {
   if (node::isBitmap(w)) {
     for (CellState s : {CellState::Free, CellState::Occupied})
-      counts_[std::size_t(s)] -= std::uint64_t(node::popcount(node::octantMask(w, s))) << (3 * (level - 1));
+      counts_[std::size_t(s)] -= node::cellsIn(node::popcount(node::octantMask(w, s)), level - 1);
     return;
   }
   const std::size_t first = node::childBase(w);

@@ -47,8 +47,7 @@ std::uint64_t assignRanks(const FastOctTree& tree, NodeWord w, std::size_t offse
                           std::uint64_t next, std::vector<std::uint64_t>& ranks) {
   if (node::isBitmap(w)) {
     ranks[offset] = next;
-    return next +
-           (std::uint64_t(node::popcount(node::octantMask(w, CellState::Occupied))) << (3 * (level - 1)));
+    return next + node::cellsIn(node::popcount(node::octantMask(w, CellState::Occupied)), level - 1);
   }
   const std::size_t first = node::childBase(w);
   for (unsigned o = 0; o < 8; ++o)
@@ -258,7 +257,7 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     const std::uint32_t before =
         node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
     const std::uint32_t inner = std::uint32_t((std::uint64_t(1) << (level - 1)) - 1);
-    rank_of[j] = std::uint32_t(ranks_[offset] + (std::uint64_t(node::popcount(before)) << (3 * (level - 1))) +
+    rank_of[j] = std::uint32_t(ranks_[offset] + node::cellsIn(node::popcount(before), level - 1) +
                                mortonWithin(u[0] & inner, u[1] & inner, u[2] & inner, level - 1));
   }
   start_.assign(std::size_t(cells) + 1, 0);

@@ -506,6 +506,17 @@ TEST(FastOctTree, HugeBoxesCostTheirSurface) {
   EXPECT_EQ(tree.getBlockCount(), 0u);
   EXPECT_EQ(tree.getOccupiedCount() + tree.getFreeCount(), 0u);
 
+  // Boxes beyond the root make it grow, whichever corner lies outside.
+  tree.setCell({1, 2, 3}, CellState::Occupied);
+  tree.setBox({-16, -16, -16}, {-1, -1, -1}, CellState::Free);
+  tree.setBox({1000, 0, 0}, {1063, 63, 63}, CellState::Occupied);
+  tree.setBox({-5000, -5000, -5000}, {-4999, -4999, -4999}, CellState::Free);
+  EXPECT_EQ(tree.getOccupiedCount(), 1u + 64 * 64 * 64);
+  EXPECT_EQ(tree.getFreeCount(), 16u * 16 * 16 + 8);
+  EXPECT_EQ(tree.getCell({1063, 63, 63}), CellState::Occupied);
+  tree.setBox({-5000, -5000, -5000}, {1063, 63, 63}, CellState::Unknown);
+  EXPECT_TRUE(tree.empty());
+
   EXPECT_THROW(tree.setBox({0, 0, 0}, {-1, 0, 0}, CellState::Free), std::invalid_argument) << "empty box";
   EXPECT_THROW(tree.setBox({kMinKey, kMinKey, 0}, {kMaxKey, kMaxKey, 0}, CellState::Free), std::invalid_argument)
       << "2^60 cells";

@@ -129,7 +129,7 @@ class NeighbourWalk {
       childCorner(base, sub, c[i].octant, lo);
       if (bitmap) {
         const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
-        searchRegion(lo, sub, rank + (std::uint64_t(node::popcount(before)) << (3 * sub)));
+        searchRegion(lo, sub, rank + node::cellsIn(node::popcount(before), sub));
       } else {
         searchWord(words_[first + c[i].octant], first + c[i].octant, sub, lo);
       }
@@ -183,7 +183,7 @@ class NeighbourWalk {
       std::uint32_t lo[3];
       childCorner(base, sub, c[i].octant, lo);
       const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
-      searchRegion(lo, sub, rank + (std::uint64_t(node::popcount(before)) << (3 * sub)));
+      searchRegion(lo, sub, rank + node::cellsIn(node::popcount(before), sub));
     }
   }
 
@@ -230,7 +230,7 @@ class NeighbourWalk {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t child[3];
       childCorner(lo, sub, c[i].octant, child);
-      searchRegion(child, sub, rank + (std::uint64_t(c[i].octant) << (3 * sub)));
+      searchRegion(child, sub, rank + node::cellsIn(c[i].octant, sub));
     }
   }
 

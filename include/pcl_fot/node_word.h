@@ -66,6 +66,12 @@ constexpr unsigned popcount(std::uint32_t mask) {
   return unsigned((x + (x >> 4)) & 0x0Fu);
 }
 
+/** Cells in `count` cubes of 2^level cells per axis: count · 8^level, saturating instead of overflowing. */
+constexpr std::uint64_t cellsIn(std::uint64_t count, unsigned level) {
+  if (count == 0) return 0;
+  return level < 21 && count <= (~std::uint64_t(0) >> (3 * level)) ? count << (3 * level) : ~std::uint64_t(0);
+}
+
 /** A bitmap whose 8 octants all hold `s`. */
 constexpr NodeWord uniform(CellState s) {
   return kBitmapTag | ((NodeWord(s) * 0x5555u) << kStateShift);

@@ -55,6 +55,19 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   int radiusSearch(const PointT& point, double radius, Indices& k_indices,
                    std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override;
 
+  /** PCL's batch searches, over setNumberOfThreads() threads; the results do not depend on the count. */
+  void nearestKSearch(const PointCloud& cloud, const Indices& indices, int k, std::vector<Indices>& k_indices,
+                      std::vector<std::vector<float>>& k_sqr_distances) const override;
+  void radiusSearch(const PointCloud& cloud, const Indices& indices, double radius, std::vector<Indices>& k_indices,
+                    std::vector<std::vector<float>>& k_sqr_distances, unsigned int max_nn = 0) const override;
+
+  /**
+   * Threads for the batch searches: 1 (the default) runs them in the caller's thread, 0 takes every hardware
+   * thread. Single queries are safe from many threads at once in any case.
+   */
+  void setNumberOfThreads(unsigned threads) { threads_ = threads; }
+  unsigned getNumberOfThreads() const { return threads_; }
+
   void setMetric(Metric metric) {
     metric_ = metric;
   }
@@ -82,10 +95,14 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
     }
   };
   Source describe(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const;
+  /** Runs query(i) for i in [0, n), split into contiguous runs over the threads. */
+  template <typename Query>
+  void forEachQuery(std::size_t n, Query&& query) const;
 
   PointIndex index_;
   Metric metric_ = Metric::Euclidean;
   Source built_;
+  unsigned threads_ = 1;
 };
 
 }  // namespace search

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <algorithm>
+#include <thread>
+
 #include <pcl/console/print.h>
 
 #include <pcl_fot/cloud_fingerprint.h>
@@ -68,6 +71,47 @@ int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, 
                                             std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
   const float q[3] = {point.x, point.y, point.z};
   return int(index_.radiusSearch(q, radius, metric_, k_indices, k_sqr_distances, max_nn));
+}
+
+template <typename PointT>
+template <typename Query>
+void FastOctTreeSearch<PointT>::forEachQuery(std::size_t n, Query&& query) const {
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t workers = std::min<std::size_t>(threads_ ? threads_ : hardware, std::max<std::size_t>(n, 1));
+  // Contiguous runs keep each thread's queries together in space, as its LineBurst path likes them.
+  auto run = [&](std::size_t w) {
+    for (std::size_t i = n * w / workers, end = n * (w + 1) / workers; i < end; ++i) query(i);
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(run, w);
+  run(0);
+  for (auto& t : pool) t.join();
+}
+
+template <typename PointT>
+void FastOctTreeSearch<PointT>::nearestKSearch(const PointCloud& cloud, const Indices& indices, int k,
+                                               std::vector<Indices>& k_indices,
+                                               std::vector<std::vector<float>>& k_sqr_distances) const {
+  const std::size_t n = indices.empty() ? cloud.size() : indices.size();
+  k_indices.resize(n);
+  k_sqr_distances.resize(n);
+  forEachQuery(n, [&](std::size_t i) {
+    nearestKSearch(cloud[indices.empty() ? i : std::size_t(indices[i])], k, k_indices[i], k_sqr_distances[i]);
+  });
+}
+
+template <typename PointT>
+void FastOctTreeSearch<PointT>::radiusSearch(const PointCloud& cloud, const Indices& indices, double radius,
+                                             std::vector<Indices>& k_indices,
+                                             std::vector<std::vector<float>>& k_sqr_distances,
+                                             unsigned int max_nn) const {
+  const std::size_t n = indices.empty() ? cloud.size() : indices.size();
+  k_indices.resize(n);
+  k_sqr_distances.resize(n);
+  forEachQuery(n, [&](std::size_t i) {
+    radiusSearch(cloud[indices.empty() ? i : std::size_t(indices[i])], radius, k_indices[i], k_sqr_distances[i],
+                 max_nn);
+  });
 }
 
 }  // namespace search

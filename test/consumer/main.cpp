@@ -1,0 +1,21 @@
+// Maps a few points through the installed library and searches them with the pcl::search drop-in.
+#include <iostream>
+
+#include <pcl/point_types.h>
+#include <pcl_fot/accessor.h>
+#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+int main() {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 100; ++i) cloud->push_back(pcl::PointXYZ(0.01f * i, 0.5f, 1.0f));
+  pcl::fot::FastOctTree map(0.05);
+  pcl::fot::insertPointCloud(map, *cloud);
+  pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ> search(0.05);
+  search.setInputCloud(cloud);
+  pcl::Indices indices;
+  std::vector<float> distances;
+  search.nearestKSearch(pcl::PointXYZ(0.5f, 0.5f, 1.0f), 1, indices, distances);
+  std::cout << "occupied cells: " << map.getOccupiedCount() << ", nearest point: " << indices.at(0) << "\n";
+  return map.getOccupiedCount() == 20 && indices.at(0) == 50 ? 0 : 1;
+}

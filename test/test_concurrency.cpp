@@ -1,0 +1,141 @@
+// The concurrency contract: const queries from many threads at once on one map, each thread with its own
+// accessor or searcher, give what the serial path gives. Built and run under ThreadSanitizer as well.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <random>
+#include <thread>
+
+#include <pcl/common/point_tests.h>
+
+#include <pcl_fot/accessor.h>
+#include <pcl_fot/cast_ray.h>
+#include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/psi.h>
+#include <pcl_fot/search/fast_oct_tree_search.h>
+
+#include "scan_data.h"
+
+using namespace pcl::fot;
+
+namespace {
+
+constexpr unsigned kThreads = 4;
+
+const FastOctTree& roomMap() {
+  static const FastOctTree map = [] {
+    FastOctTree t(0.05);
+    insertScan(t, *pcl_fot_test::loadScan("room_scan1.pcd"));
+    return t;
+  }();
+  return map;
+}
+
+std::vector<Key> queryKeys(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<Key> keys;
+  for (std::size_t i = 0; i < n; ++i)
+    keys.push_back({std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 60) - 10});
+  return keys;
+}
+
+/** Runs body(thread) on kThreads threads at once, released together. */
+template <typename Body>
+void together(Body&& body) {
+  std::atomic<unsigned> ready{0};
+  std::vector<std::thread> threads;
+  for (unsigned t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      ++ready;
+      while (ready < kThreads) std::this_thread::yield();
+      body(t);
+    });
+  for (auto& th : threads) th.join();
+}
+
+}  // namespace
+
+TEST(Concurrency, CellReadsNearestCellsAndRayCasts) {
+  const FastOctTree& map = roomMap();
+  const std::vector<Key> keys = queryKeys(20000, 1);
+  std::vector<CellState> states;
+  std::vector<std::int64_t> nearest;
+  std::vector<Key> hits;
+  {
+    ConstAccessor cells(map);
+    NearestCellSearch search(map);
+    for (const Key& k : keys) {
+      states.push_back(cells.getCell(k));
+      CellMatch m;
+      nearest.push_back(search.nearest(k, m) ? m.distance : -1);
+    }
+    for (std::size_t i = 0; i < 2000; ++i) {
+      const float origin[3] = {0, 0, 0}, dir[3] = {std::cos(0.01f * i), std::sin(0.01f * i), 0.1f};
+      Key hit{};
+      castRay(map, origin, dir, hit, 30.0f);
+      hits.push_back(hit);
+    }
+  }
+  together([&](unsigned t) {
+    ConstAccessor cells(map);  // one accessor and one searcher per thread
+    NearestCellSearch search(map);
+    for (std::size_t i = t; i < keys.size(); i += kThreads) {
+      ASSERT_EQ(cells.getCell(keys[i]), states[i]);
+      CellMatch m;
+      ASSERT_EQ(search.nearest(keys[i], m) ? m.distance : -1, nearest[i]);
+    }
+    for (std::size_t i = t; i < hits.size(); i += kThreads) {
+      const float origin[3] = {0, 0, 0}, dir[3] = {std::cos(0.01f * i), std::sin(0.01f * i), 0.1f};
+      Key hit{};
+      castRay(map, origin, dir, hit, 30.0f);
+      ASSERT_EQ(hit, hits[i]);
+    }
+    std::size_t regions = 0;
+    map.forEachRegionInBox({-20, -20, 0}, {20, 20, 20}, [&](const Region&) { ++regions; });
+    ASSERT_GT(regions, 0u);
+  });
+}
+
+TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
+  const FastOctTree& a = roomMap();
+  FastOctTree b(0.05);
+  insertScan(b, *pcl_fot_test::loadScan("room_scan2.pcd"));
+  PsiOptions serial, parallel;
+  parallel.threads = kThreads;
+  parallel.include_free = serial.include_free = true;
+  const PsiResult expected = psi(a, b, serial);
+  together([&](unsigned) {  // several ψ at once, each itself threaded
+    const PsiResult r = psi(a, b, parallel);
+    ASSERT_EQ(r.sum, expected.sum);
+    ASSERT_EQ(r.cells, expected.cells);
+  });
+
+  const auto cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
+  const auto queries = pcl_fot_test::loadScan("kinect_capture0002.pcd");
+  pcl::Indices finite;
+  for (std::size_t i = 0; i < queries->size(); i += 7)
+    if (pcl::isFinite((*queries)[i])) finite.push_back(pcl::index_t(i));
+  search::FastOctTreeSearch<pcl::PointXYZ> index(0.03);
+  index.setInputCloud(cloud);
+  std::vector<pcl::Indices> serial_k, threaded_k, serial_r, threaded_r;
+  std::vector<std::vector<float>> serial_kd, threaded_kd, serial_rd, threaded_rd;
+  index.nearestKSearch(*queries, finite, 5, serial_k, serial_kd);
+  index.radiusSearch(*queries, finite, 0.02, serial_r, serial_rd, 20);
+  index.setNumberOfThreads(kThreads);
+  index.nearestKSearch(*queries, finite, 5, threaded_k, threaded_kd);
+  index.radiusSearch(*queries, finite, 0.02, threaded_r, threaded_rd, 20);
+  EXPECT_EQ(threaded_k, serial_k);
+  EXPECT_EQ(threaded_kd, serial_kd);
+  EXPECT_EQ(threaded_r, serial_r);
+  EXPECT_EQ(threaded_rd, serial_rd);
+  // And single queries from many threads at once on the shared index.
+  together([&](unsigned t) {
+    pcl::Indices idx;
+    std::vector<float> d;
+    for (std::size_t i = t; i < finite.size(); i += kThreads) {
+      index.nearestKSearch((*queries)[std::size_t(finite[i])], 5, idx, d);
+      ASSERT_EQ(idx, serial_k[i]);
+    }
+  });
+}
