@@ -9,7 +9,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const char* bytes = reinterpret_cast<const char*>(data);
   try {
-    const pcl::fot::FastOctTree tree = pcl::fot::io::decodeFot(bytes, size, "fuzz.fot", std::size_t(64) << 20);
+    const pcl::fot::FastOctTree tree =
+        pcl::fot::io::decodeFot(bytes, size, "fuzz.fot", std::size_t(64) << 20);
     if (pcl::fot::io::encodeFot(tree) != std::string(bytes, size)) std::abort();
   } catch (const pcl::fot::io::FormatError&) {
   }

@@ -34,7 +34,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   pcl::fot::ScanStats stats;
   for (int pass = 0; pass < 2; ++pass) {
     try {
-      stats = pcl::fot::insertRays(pass ? without : with, sensor, xyz.data(), count, 12, pass ? plain : options);
+      stats =
+          pcl::fot::insertRays(pass ? without : with, sensor, xyz.data(), count, 12, pass ? plain : options);
     } catch (const std::invalid_argument&) {  // a sensor position that is not finite
       outcome[pass] = 1;
     } catch (const std::out_of_range&) {  // a sensor beyond the key range
@@ -52,7 +53,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (stats.occupied > stats.rays) std::abort();
   if (!(with == without)) std::abort();
   if (with.getNodeCount() < 200000) {
-    const pcl::fot::FastOctTree rebuilt = pcl::fot::FastOctTree::fromCanonicalPool(with.getGrid(), with.canonicalPool());
+    const pcl::fot::FastOctTree rebuilt =
+        pcl::fot::FastOctTree::fromCanonicalPool(with.getGrid(), with.canonicalPool());
     if (!(rebuilt == with)) std::abort();
   }
   return 0;

@@ -17,9 +17,11 @@ void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& o
   if (root_level <= 3) {  // the whole tree fits one part: it lies inside this one or outside it
     const auto& base = tree_.rootBase();
     if (((base[0] - x) | (base[1] - y) | (base[2] - z)) < 8)
-      out.part.setFromWord(words, tree_.rootWord(), root_level, base[0] - x, base[1] - y, base[2] - z, state_);
+      out.part.setFromWord(words, tree_.rootWord(), root_level, base[0] - x, base[1] - y, base[2] - z,
+                           state_);
   } else {
-    const unsigned bottom = cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
+    const unsigned bottom =
+        cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
     if (bottom > 3) {  // inside a uniform octant at least as large as the part
       if (node::state(words[cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == state_)
         out.part.bits.fill(~std::uint64_t(0));
@@ -31,7 +33,8 @@ void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& o
 }
 
 const PartCache::Entry& PartCache::part(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-  const std::size_t slot = ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) % slots_.size();
+  const std::size_t slot =
+      ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) % slots_.size();
   Entry& e = slots_[slot];
   if (!e.valid || e.corner[0] != x || e.corner[1] != y || e.corner[2] != z) {
     read(x, y, z, e);
@@ -67,7 +70,8 @@ template <unsigned Reach>
 void BrickWindow<Reach>::dilate(unsigned step) {
   const Row* in = rows(current_);
   Row* out = rows(current_ ^ 1);
-  // Errors from the unseen outside move inwards one row per step: later steps read only [step, kWindow - step).
+  // Errors from the unseen outside move inwards one row per step: later steps read only [step, kWindow -
+  // step).
   for (unsigned z = step; z < kWindow - step; ++z)
     for (unsigned y = step; y < kWindow - step; ++y) {
       const std::size_t i = z * kWindow + y;

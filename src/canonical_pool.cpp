@@ -60,7 +60,8 @@ class PoolCheck {
     const std::uint32_t states = w >> node::kStateShift;
     if ((w & 0xFFFEu) != 0) fail("a bitmap word has spare bits set");
     if ((states & (states >> 1) & 0x5555u) != 0) fail("a bitmap word holds an invalid state");
-    const std::uint32_t known = node::octantMask(w, CellState::Free) | node::octantMask(w, CellState::Occupied);
+    const std::uint32_t known =
+        node::octantMask(w, CellState::Free) | node::octantMask(w, CellState::Occupied);
     if (!known) return;
     const unsigned sub = level - 1;
     if (sub > 20) fail("a uniform cube is too large to count");
@@ -68,7 +69,8 @@ class PoolCheck {
     const std::uint32_t lo = tree_coord::fromKey(kMinKey), hi = tree_coord::fromKey(kMaxKey);
     for (unsigned o = 0; o < 8; ++o) {
       if (!((known >> o) & 1u)) continue;
-      const std::uint32_t c[3] = {x + (o & 1u) * side, y + ((o >> 1) & 1u) * side, z + ((o >> 2) & 1u) * side};
+      const std::uint32_t c[3] = {x + (o & 1u) * side, y + ((o >> 1) & 1u) * side,
+                                  z + ((o >> 2) & 1u) * side};
       for (std::uint32_t v : c)
         if (v < lo || std::uint64_t(v) + side - 1 > hi) fail("known cells lie beyond the key range");
     }
@@ -90,7 +92,8 @@ bool minimalRoot(const std::vector<NodeWord>& words, NodeWord root, unsigned lev
   if (level == 1) return true;
   unsigned known = 0;
   for (unsigned o = 0; o < 8; ++o) {
-    const NodeWord w = node::isBitmap(root) ? node::uniform(node::state(root, o)) : words[node::childBase(root) + o];
+    const NodeWord w =
+        node::isBitmap(root) ? node::uniform(node::state(root, o)) : words[node::childBase(root) + o];
     known += w != node::uniform(CellState::Unknown);
   }
   return known != 1;
@@ -112,16 +115,19 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   while (level > 1) {
     unsigned only = 8, known = 0;
     for (unsigned o = 0; o < 8; ++o) {
-      const NodeWord w = node::isBitmap(root) ? node::uniform(node::state(root, o)) : words_[node::childBase(root) + o];
+      const NodeWord w =
+          node::isBitmap(root) ? node::uniform(node::state(root, o)) : words_[node::childBase(root) + o];
       if (w == node::uniform(CellState::Unknown)) continue;
       ++known;
       only = o;
     }
     if (known != 1) break;
-    root = node::isBitmap(root) ? node::uniform(node::state(root, only)) : words_[node::childBase(root) + only];
+    root =
+        node::isBitmap(root) ? node::uniform(node::state(root, only)) : words_[node::childBase(root) + only];
     --level;
     const std::uint32_t half = std::uint32_t(1) << level;
-    base = {base[0] + (only & 1u) * half, base[1] + ((only >> 1) & 1u) * half, base[2] + ((only >> 2) & 1u) * half};
+    base = {base[0] + (only & 1u) * half, base[1] + ((only >> 1) & 1u) * half,
+            base[2] + ((only >> 2) & 1u) * half};
   }
   pool.root_level = level;
   pool.root_base = base;
@@ -132,13 +138,15 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
 
 FastOctTree FastOctTree::fromCanonicalPool(const VoxelGrid& grid, CanonicalPool pool, std::size_t max_bytes) {
   const unsigned level = pool.root_level;
-  if (level < 1 || level > kMaxLevel) PoolCheck::fail("the root level " + std::to_string(level) + " is not in [1, 31]");
+  if (level < 1 || level > kMaxLevel)
+    PoolCheck::fail("the root level " + std::to_string(level) + " is not in [1, 31]");
   const std::uint32_t align = (std::uint32_t(1) << level) - 1;
   for (std::uint32_t b : pool.root_base)
     if (b & align) PoolCheck::fail("the root is not aligned to its size");
   const std::vector<NodeWord>& words = pool.words;
   if (words.size() < 8 || words.size() % 8 != 0) PoolCheck::fail("the pool is not made of whole blocks");
-  if (words.size() / 8 - 1 > node::kMaxBlocks) PoolCheck::fail("the pool has more blocks than a reference can address");
+  if (words.size() / 8 - 1 > node::kMaxBlocks)
+    PoolCheck::fail("the pool has more blocks than a reference can address");
   if (words.size() * sizeof(NodeWord) > max_bytes)
     throw MemoryLimitError("pcl::fot::FastOctTree::fromCanonicalPool: the pool needs " +
                            std::to_string(words.size() * sizeof(NodeWord)) + " bytes, beyond the cap of " +
@@ -149,9 +157,11 @@ FastOctTree FastOctTree::fromCanonicalPool(const VoxelGrid& grid, CanonicalPool 
   // A reference's block must exist before the walk follows it, and a root reference is checked as any other.
   PoolCheck check(words);
   check.word(root, level, pool.root_base[0], pool.root_base[1], pool.root_base[2]);
-  if (check.blocksSeen() != words.size() / 8 - 1) PoolCheck::fail("the pool holds blocks that no word refers to");
-  if (root == node::uniform(CellState::Unknown) ? (level != 1 || pool.root_base != std::array<std::uint32_t, 3>{})
-                                                 : !minimalRoot(words, root, level))
+  if (check.blocksSeen() != words.size() / 8 - 1)
+    PoolCheck::fail("the pool holds blocks that no word refers to");
+  if (root == node::uniform(CellState::Unknown)
+          ? (level != 1 || pool.root_base != std::array<std::uint32_t, 3>{})
+          : !minimalRoot(words, root, level))
     PoolCheck::fail("the root is not the smallest cube holding the known cells");
 
   FastOctTree tree(grid);

@@ -10,11 +10,14 @@ namespace fot {
 namespace {
 
 /** d + 1, staying at kNone. */
-inline std::uint16_t step(std::uint16_t d) { return d == DistanceMap::kNone ? d : std::uint16_t(d + 1); }
+inline std::uint16_t step(std::uint16_t d) {
+  return d == DistanceMap::kNone ? d : std::uint16_t(d + 1);
+}
 
 }  // namespace
 
-DistanceMap::DistanceMap(const FastOccMesh& grid, CellState value) : side_(grid.getSide()), min_key_(grid.getMinKey()) {
+DistanceMap::DistanceMap(const FastOccMesh& grid, CellState value)
+    : side_(grid.getSide()), min_key_(grid.getMinKey()) {
   if (side_ > (kNone - 1) / 3)
     throw std::invalid_argument("pcl::fot::DistanceMap: a cube of side " + std::to_string(side_) +
                                 " cells has distances beyond 16 bits");
@@ -54,35 +57,24 @@ DistanceMap::DistanceMap(const FastOccMesh& grid, CellState value) : side_(grid.
 
 PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, const PsiOptions& options) {
   if (a.getGrid() != b.getGrid() || a.getSide() != b.getSide() || a.getMinKey() != b.getMinKey())
-    throw std::invalid_argument("pcl::fot::psiByDistanceMaps: the grids must share resolution, origin and cube");
-  if (options.cap < 0) throw std::invalid_argument("pcl::fot::psiByDistanceMaps: the cap must not be negative");
-  const bool capped = options.cap != std::numeric_limits<std::int64_t>::max();
-  PsiResult result;
-  result.resolution = a.getResolution();
-  for (CellState v : {CellState::Occupied, CellState::Free}) {
-    if (v == CellState::Free && !options.include_free) continue;
-    const std::uint64_t na = v == CellState::Occupied ? a.getOccupiedCount() : a.getFreeCount();
-    const std::uint64_t nb = v == CellState::Occupied ? b.getOccupiedCount() : b.getFreeCount();
-    result.cells += na + nb;
-    if (na == 0 && nb == 0) continue;
-    if (na == 0 || nb == 0) {
-      if (!capped) {
-        result.defined = false;
-        continue;
-      }
-      result.sum += (na + nb) * std::uint64_t(options.cap);
-      continue;
-    }
-    // One map at a time: 2 GiB each at 1024³.
-    auto read_off = [&](const FastOccMesh& from, const FastOccMesh& to) {
-      const DistanceMap map(to, v);
-      std::uint64_t sum = 0;
-      from.forEachCell(v, [&](const Key& k) { sum += std::uint64_t(std::min<std::int64_t>(map.at(k), options.cap)); });
-      return sum;
-    };
-    result.sum += read_off(a, b) + read_off(b, a);
-  }
-  return result;
+    throw std::invalid_argument(
+        "pcl::fot::psiByDistanceMaps: the grids must share resolution, origin and cube");
+  if (options.cap < 0)
+    throw std::invalid_argument("pcl::fot::psiByDistanceMaps: the cap must not be negative");
+  auto count = [](const FastOccMesh& g, CellState v) {
+    return v == CellState::Occupied ? g.getOccupiedCount() : g.getFreeCount();
+  };
+  // One distance map at a time: 2 GiB each at 1024³.
+  auto read_off = [&](const FastOccMesh& from, const FastOccMesh& to, CellState v) {
+    const DistanceMap map(to, v);
+    std::uint64_t sum = 0;
+    from.forEachCell(
+        v, [&](const Key& k) { sum += std::uint64_t(std::min<std::int64_t>(map.at(k), options.cap)); });
+    return sum;
+  };
+  return detail::sumOverValues(
+      options, a.getResolution(), [&](CellState v) { return std::make_pair(count(a, v), count(b, v)); },
+      [&](CellState v) { return read_off(a, b, v) + read_off(b, a, v); });
 }
 
 }  // namespace fot

@@ -45,17 +45,14 @@ void FastOccMesh::addFreePlane() {
 }
 
 CellState FastOccMesh::getCellAtPoint(double x, double y, double z) const {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-    throw std::invalid_argument("pcl::fot::FastOccMesh::getCellAtPoint: the point is not finite");
   Key key;
-  return grid_.pointToKey(x, y, z, key) ? getCell(key) : CellState::Unknown;
+  return grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOccMesh::getCellAtPoint") ? getCell(key)
+                                                                                       : CellState::Unknown;
 }
 
 void FastOccMesh::setCellAtPoint(double x, double y, double z, CellState state) {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-    throw std::invalid_argument("pcl::fot::FastOccMesh::setCellAtPoint: the point is not finite");
   Key key;
-  if (!grid_.pointToKey(x, y, z, key) || !contains(key))
+  if (!grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOccMesh::setCellAtPoint") || !contains(key))
     throw std::out_of_range("pcl::fot::FastOccMesh::setCellAtPoint: the point lies outside the grid");
   setCell(key, state);
 }

@@ -31,17 +31,14 @@ void FastOctTree::setCell(const Key& key, CellState state) {
 }
 
 CellState FastOctTree::getCellAtPoint(double x, double y, double z) const {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-    throw std::invalid_argument("pcl::fot::FastOctTree::getCellAtPoint: the point is not finite");
   Key key;
-  return grid_.pointToKey(x, y, z, key) ? getCell(key) : CellState::Unknown;
+  return grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOctTree::getCellAtPoint") ? getCell(key)
+                                                                                       : CellState::Unknown;
 }
 
 void FastOctTree::setCellAtPoint(double x, double y, double z, CellState state) {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-    throw std::invalid_argument("pcl::fot::FastOctTree::setCellAtPoint: the point is not finite");
   Key key;
-  if (!grid_.pointToKey(x, y, z, key))
+  if (!grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOctTree::setCellAtPoint"))
     throw std::out_of_range("pcl::fot::FastOctTree::setCellAtPoint: the point lies beyond the key range of " +
                             std::to_string(kMaxKey) + " cells from the map origin");
   setCell(key, state);
@@ -85,14 +82,16 @@ void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
   if (!isValidKey(lo)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", lo);
   if (!isValidKey(hi)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", hi);
   if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z)
-    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box " + toString(lo) + " to " + toString(hi) +
-                                " is empty");
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box " + toString(lo) + " to " +
+                                toString(hi) + " is empty");
   const std::uint64_t sx = std::uint64_t(hi.x - lo.x) + 1, sy = std::uint64_t(hi.y - lo.y) + 1,
                       sz = std::uint64_t(hi.z - lo.z) + 1;
   if ((unsigned __int128)(sx * sy) * sz >= (unsigned __int128)1 << 60)
     throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box holds 2^60 cells or more");
-  const std::uint64_t l[3] = {tree_coord::fromKey(lo.x), tree_coord::fromKey(lo.y), tree_coord::fromKey(lo.z)};
-  const std::uint64_t h[3] = {tree_coord::fromKey(hi.x), tree_coord::fromKey(hi.y), tree_coord::fromKey(hi.z)};
+  const std::uint64_t l[3] = {tree_coord::fromKey(lo.x), tree_coord::fromKey(lo.y),
+                              tree_coord::fromKey(lo.z)};
+  const std::uint64_t h[3] = {tree_coord::fromKey(hi.x), tree_coord::fromKey(hi.y),
+                              tree_coord::fromKey(hi.z)};
   // Split the smallest aligned cube holding the box down to the cubes inside it.
   auto split = [&](auto& self, std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) -> void {
     const std::uint64_t c[3] = {x, y, z}, last = (std::uint64_t(1) << level) - 1;
@@ -115,9 +114,11 @@ void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
   split(split, std::uint32_t(l[0]) & mask, std::uint32_t(l[1]) & mask, std::uint32_t(l[2]) & mask, top);
 }
 
-void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level, CellState state) {
+void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level,
+                          CellState state) {
   if (level == 0) {
-    Accessor(*this, false).setValidCell(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)}, state);
+    Accessor(*this, false)
+        .setValidCell(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)}, state);
     return;
   }
   const std::uint32_t apart = (x ^ base_[0]) | (y ^ base_[1]) | (z ^ base_[2]);

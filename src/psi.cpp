@@ -53,13 +53,15 @@ class DirectedSum {
   /** Windows cost about as much as a few searches: below this many cells a brick is searched cell by cell. */
   static constexpr unsigned kMinWindowCells = 4, kMinFarWindowCells = 24;
 
-  /** A cube of a's cells, all holding v, of at least a brick: zero if b holds v throughout, else by bricks. */
+  /** A cube of a's cells, all holding v, of at least a brick: zero if b holds v throughout, else by bricks.
+   */
   std::uint64_t cube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
     // The maps share their grid, so the cube is aligned in b too: b holds one state throughout it when the
     // bitmap octant holding its corner is at least as large.
-    const unsigned bottom = b_cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
-    if (bottom > level &&
-        node::state(b_cells_.tree().words()[b_cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == v_)
+    const unsigned bottom =
+        b_cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
+    if (bottom > level && node::state(b_cells_.tree().words()[b_cells_.pathOffset(bottom)],
+                                      tree_coord::octant(x, y, z, bottom)) == v_)
       return 0;
     if (level == detail::kBrickLevel) {
       detail::Brick full;
@@ -110,7 +112,8 @@ class DirectedSum {
 };
 
 /** d(a, b, v) of eq. 2, split over threads by cell counts; integer sums, so any split gives the same. */
-std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap, unsigned threads) {
+std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap,
+                       unsigned threads) {
   std::vector<Region> regions;
   std::vector<std::uint64_t> cells_before;  // running cell count, for splitting the work evenly
   std::uint64_t total = 0;
@@ -144,32 +147,18 @@ std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, 
 
 PsiResult psi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& options) {
   if (a.getGrid() != b.getGrid())
-    throw std::invalid_argument("pcl::fot::psi: the maps must share their voxel grid (resolution and origin); got " +
-                                std::to_string(a.getResolution()) + " m and " + std::to_string(b.getResolution()) +
-                                " m cells");
+    throw std::invalid_argument(
+        "pcl::fot::psi: the maps must share their voxel grid (resolution and origin); got " +
+        std::to_string(a.getResolution()) + " m and " + std::to_string(b.getResolution()) + " m cells");
   if (options.cap < 0) throw std::invalid_argument("pcl::fot::psi: the cap must not be negative");
-  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  const bool capped = options.cap != std::numeric_limits<std::int64_t>::max();
-  PsiResult result;
-  result.resolution = a.getResolution();
-  const CellState values[] = {CellState::Occupied, CellState::Free};
-  for (CellState v : values) {
-    if (v == CellState::Free && !options.include_free) continue;
-    const std::uint64_t na = cellCount(a, v), nb = cellCount(b, v);
-    result.cells += na + nb;
-    if (na == 0 && nb == 0) continue;
-    if (na == 0 || nb == 0) {
-      // The other map has no such cell: there is no distance to take, unless a cap stands in for it.
-      if (!capped) {
-        result.defined = false;
-        continue;
-      }
-      result.sum += (na + nb) * std::uint64_t(options.cap);
-      continue;
-    }
-    result.sum += directed(a, b, v, options.cap, threads) + directed(b, a, v, options.cap, threads);
-  }
-  return result;
+  const unsigned threads =
+      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  return detail::sumOverValues(
+      options, a.getResolution(),
+      [&](CellState v) { return std::make_pair(cellCount(a, v), cellCount(b, v)); },
+      [&](CellState v) {
+        return directed(a, b, v, options.cap, threads) + directed(b, a, v, options.cap, threads);
+      });
 }
 
 }  // namespace fot

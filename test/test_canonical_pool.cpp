@@ -17,7 +17,7 @@ FastOctTree randomTree(unsigned seed, int writes) {
     t.setCell(k, CellState(1 + rng() % 2));
   }
   t.setBox({-64, -64, -8}, {-33, -33, -1}, CellState::Free);  // collapsed regions at several levels
-  t.setCell({100000, -3, 7}, CellState::Occupied);              // a deep, sparse branch
+  t.setCell({100000, -3, 7}, CellState::Occupied);            // a deep, sparse branch
   return t;
 }
 
@@ -115,7 +115,8 @@ TEST(CanonicalPool, EveryFlawIsNamed) {
   expectRefused(pool, "invalid state");
   // A block of uniform words left unfolded.
   pool = good;
-  for (std::size_t i = pool.words.size() - 8; i < pool.words.size(); ++i) pool.words[i] = node::uniform(CellState::Free);
+  for (std::size_t i = pool.words.size() - 8; i < pool.words.size(); ++i)
+    pool.words[i] = node::uniform(CellState::Free);
   expectRefused(pool, "fold");
   // A reference below level 2: the deepest block's words are leaves.
   pool = good;
@@ -129,7 +130,8 @@ TEST(CanonicalPool, EveryFlawIsNamed) {
     for (int o = 0; o < 8; ++o) words[8 + o] = node::uniform(CellState::Unknown);
     words[8] = good.words[0];
     for (std::size_t i = 8; i < good.words.size(); ++i)
-      words.push_back(node::isBitmap(good.words[i]) ? good.words[i] : node::reference(node::block(good.words[i]) + 1));
+      words.push_back(node::isBitmap(good.words[i]) ? good.words[i]
+                                                    : node::reference(node::block(good.words[i]) + 1));
     words[8] = node::isBitmap(good.words[0]) ? good.words[0] : node::reference(2);
     pool.words = words;
     pool.root_level = good.root_level + 1;

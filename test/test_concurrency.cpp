@@ -36,7 +36,8 @@ std::vector<Key> queryKeys(std::size_t n, unsigned seed) {
   std::mt19937 rng(seed);
   std::vector<Key> keys;
   for (std::size_t i = 0; i < n; ++i)
-    keys.push_back({std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 60) - 10});
+    keys.push_back(
+        {std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 200) - 100, std::int32_t(rng() % 60) - 10});
   return keys;
 }
 

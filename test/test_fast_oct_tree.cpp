@@ -466,7 +466,10 @@ TEST(FastOctTree, BoxesAgainstHashModel) {
   FastOctTree tree(0.1);
   Model model;
   // Near the origin, and at the edges of the key range, where the root grows to its full height.
-  const Key centres[] = {{0, 0, 0}, {-37, 12, 5}, {kMaxKey - 30, kMinKey, 3}, {kMinKey, kMinKey, kMinKey},
+  const Key centres[] = {{0, 0, 0},
+                         {-37, 12, 5},
+                         {kMaxKey - 30, kMinKey, 3},
+                         {kMinKey, kMinKey, kMinKey},
                          {kMaxKey - 30, kMaxKey - 30, kMaxKey - 30}};
   for (int i = 0; i < 3000; ++i) {
     const Key& c = centres[(i / 300) % 5];
@@ -518,7 +521,8 @@ TEST(FastOctTree, HugeBoxesCostTheirSurface) {
   EXPECT_TRUE(tree.empty());
 
   EXPECT_THROW(tree.setBox({0, 0, 0}, {-1, 0, 0}, CellState::Free), std::invalid_argument) << "empty box";
-  EXPECT_THROW(tree.setBox({kMinKey, kMinKey, 0}, {kMaxKey, kMaxKey, 0}, CellState::Free), std::invalid_argument)
+  EXPECT_THROW(tree.setBox({kMinKey, kMinKey, 0}, {kMaxKey, kMaxKey, 0}, CellState::Free),
+               std::invalid_argument)
       << "2^60 cells";
   EXPECT_THROW(tree.setBox({0, 0, 0}, {kMaxKey + 1, 0, 0}, CellState::Free), std::out_of_range);
   EXPECT_TRUE(tree.empty());

@@ -6,8 +6,8 @@
 #include <cstring>
 #include <random>
 
-#include <boost/crc.hpp>
 #include <unistd.h>
+#include <boost/crc.hpp>
 
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/occupancy_mapping.h>
@@ -148,7 +148,8 @@ TEST(FotFile, EveryHeaderFieldIsChecked) {
   put32(b, 96 + 4 * 9, 0x10u | node::uniform(CellState::Free));  // a spare bit in a pool word
   reseal(b);
   expectRejected(b, "spare bits");
-  EXPECT_THROW(io::decodeFot(good.data(), good.size(), "test.fot", 64), io::FormatError) << "the caller's cap";
+  EXPECT_THROW(io::decodeFot(good.data(), good.size(), "test.fot", 64), io::FormatError)
+      << "the caller's cap";
 }
 
 TEST(FotFile, ThousandsOfDamagedFilesFailCleanlyOrLoadValidMaps) {
@@ -171,7 +172,8 @@ TEST(FotFile, ThousandsOfDamagedFilesFailCleanlyOrLoadValidMaps) {
     for (unsigned n = 1 + rng() % 4; n > 0; --n) b[rng() % b.size()] ^= char(1u << (rng() % 8));
     attempt(b);
   }
-  for (int i = 0; i < 400; ++i) {  // flips in the header or pool behind a valid checksum: hostile, not damaged
+  for (int i = 0; i < 400;
+       ++i) {  // flips in the header or pool behind a valid checksum: hostile, not damaged
     std::string b = good;
     const std::size_t at = rng() % 2 ? 8 + rng() % 88 : 96 + rng() % (b.size() - 100);
     b[at] ^= char(1u << (rng() % 8));

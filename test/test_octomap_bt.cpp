@@ -60,10 +60,12 @@ void expectSameCells(const octomap::OcTree& om, const FastOctTree& ours) {
       const std::int64_t rs = std::int64_t(1) << r.level;
       const std::int64_t rl[3] = {r.min_key.x, r.min_key.y, r.min_key.z}, bl[3] = {lo.x, lo.y, lo.z},
                          bh[3] = {hi.x, hi.y, hi.z};
-      for (int a = 0; a < 3; ++a) v *= std::uint64_t(std::min(rl[a] + rs - 1, bh[a]) - std::max(rl[a], bl[a]) + 1);
+      for (int a = 0; a < 3; ++a)
+        v *= std::uint64_t(std::min(rl[a] + rs - 1, bh[a]) - std::max(rl[a], bl[a]) + 1);
       covered += v;
     });
-    ASSERT_TRUE(same && covered == side * side * side) << "OctoMap leaf at " << toString(lo) << ", side " << side;
+    ASSERT_TRUE(same && covered == side * side * side)
+        << "OctoMap leaf at " << toString(lo) << ", side " << side;
   }
   EXPECT_EQ(ours.getOccupiedCount(), occupied);
   EXPECT_EQ(ours.getFreeCount(), free);

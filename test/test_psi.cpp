@@ -32,7 +32,8 @@ std::vector<PsiResult> bruteForcePsi(const FastOctTree& a, const FastOctTree& b,
       for (const Key& p : from) {
         std::int64_t best = std::numeric_limits<std::int64_t>::max();
         for (const Key& q : to)
-          best = std::min<std::int64_t>(best, std::abs(std::int64_t(p.x) - q.x) + std::abs(std::int64_t(p.y) - q.y) +
+          best = std::min<std::int64_t>(best, std::abs(std::int64_t(p.x) - q.x) +
+                                                  std::abs(std::int64_t(p.y) - q.y) +
                                                   std::abs(std::int64_t(p.z) - q.z));
         nearest.push_back(best);
       }
@@ -45,7 +46,8 @@ std::vector<PsiResult> bruteForcePsi(const FastOctTree& a, const FastOctTree& b,
       const bool capped = caps[i] != std::numeric_limits<std::int64_t>::max();
       if ((ca.empty() != cb.empty()) && !capped) r.defined = false;
       for (std::int64_t d : nearest)
-        if (d != std::numeric_limits<std::int64_t>::max() || capped) r.sum += std::uint64_t(std::min(d, caps[i]));
+        if (d != std::numeric_limits<std::int64_t>::max() || capped)
+          r.sum += std::uint64_t(std::min(d, caps[i]));
     }
   }
   return results;
@@ -80,7 +82,8 @@ TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
     const int spread = trial % 2 ? 100 : 40;
     TwinMaps a(0.1, 128), b(0.1, 128);
     auto cell = [&](int shift_x, int shift_y) {
-      return Key{std::int32_t(rng() % spread) - spread / 2 + shift_x, std::int32_t(rng() % spread) - spread / 2 + shift_y,
+      return Key{std::int32_t(rng() % spread) - spread / 2 + shift_x,
+                 std::int32_t(rng() % spread) - spread / 2 + shift_y,
                  std::int32_t(rng() % spread) - spread / 2};
     };
     for (int i = 0; i < n; ++i) {
@@ -174,7 +177,8 @@ TEST(Psi, GrowsAsAScanIsShiftedFromItself) {
   std::uint64_t last = 0;
   for (int step = 1; step <= 10; ++step) {
     pcl::PointCloud<pcl::PointXYZ> shifted;
-    pcl::transformPointCloud(*cloud, shifted, Eigen::Affine3f(Eigen::Translation3f(float(step * res), 0.0f, 0.0f)));
+    pcl::transformPointCloud(*cloud, shifted,
+                             Eigen::Affine3f(Eigen::Translation3f(float(step * res), 0.0f, 0.0f)));
     FastOctTree moved(res);
     insertPointCloud(moved, shifted);
     const std::uint64_t s = psi(base, moved).sum;

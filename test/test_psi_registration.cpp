@@ -29,7 +29,8 @@ Cloud::Ptr downsampled(const std::string& name, float leaf) {
 
 /** The NDT tutorial's initial guess for room_scan2 onto room_scan1 (see the data README). */
 Eigen::Matrix4f tutorialGuess() {
-  return (Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) * Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ()))
+  return (Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) *
+          Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ()))
       .matrix();
 }
 
@@ -118,8 +119,8 @@ TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
     rejector->setCallback([&](std::size_t, double, double m) { mse.push_back(m); });
     icp.addCorrespondenceRejector(rejector);
     if (stop_on_psi) {
-      auto criteria = pcl::make_shared<pcl::registration::PsiConvergenceCriteria<float>>(*icp.getConvergeCriteria(),
-                                                                                        rejector->history());
+      auto criteria = pcl::make_shared<pcl::registration::PsiConvergenceCriteria<float>>(
+          *icp.getConvergeCriteria(), rejector->history());
       criteria->setRelativePsiImprovement(0.01);
       icp.convergence_criteria_ = criteria;
     }
@@ -136,5 +137,6 @@ TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
   EXPECT_LT(full.back(), full.front()) << "ICP improves ψ";
   EXPECT_LT(full_mse.back(), full_mse.front());
   EXPECT_LT(early.size(), full.size()) << "ψ's convergence test stops ICP sooner";
-  EXPECT_EQ(std::vector<double>(full.begin(), full.begin() + early.size()), early) << "the same steps until then";
+  EXPECT_EQ(std::vector<double>(full.begin(), full.begin() + early.size()), early)
+      << "the same steps until then";
 }

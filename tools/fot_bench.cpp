@@ -26,7 +26,8 @@ void printHelp(const char* prog) {
       "and writes the tables as Markdown.\n\n"
       "Syntax: %s [options]\n\n"
       "  -data <dir>        directory with the scans of PCL's data repository (default: ../shared/data)\n"
-      "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside it\n"
+      "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside "
+      "it\n"
       "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
       "  -ray_repeats <n>   rounds of the ray tracing, search and psi timings (default: 5)\n"
       "  -dmap_repeats <n>  runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
@@ -48,7 +49,8 @@ std::string firstLineOf(const char* path, const char* key) {
 
 int main(int argc, char** argv) {
   return runTool("fot_bench", [&] {
-    const Arguments args(argc, argv, {"-data", "-out", "-repeats", "-ray_repeats", "-dmap_repeats", "-sections"},
+    const Arguments args(argc, argv,
+                         {"-data", "-out", "-repeats", "-ray_repeats", "-dmap_repeats", "-sections"},
                          {"-h", "--help"});
     if (args.has("-h") || args.has("--help")) {
       printHelp("fot_bench");
@@ -64,7 +66,9 @@ int main(int argc, char** argv) {
     args.get("-sections", sections);
     if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1)
       throw ToolError(kExitUsage, "-repeats, -ray_repeats and -dmap_repeats must be at least 1");
-    auto wanted = [&](const std::string& s) { return ("," + sections + ",").find("," + s + ",") != std::string::npos; };
+    auto wanted = [&](const std::string& s) {
+      return ("," + sections + ",").find("," + s + ",") != std::string::npos;
+    };
     TicToc total;
     total.tic();
     const auto scans = fot_bench::loadBenchScans(data_dir);

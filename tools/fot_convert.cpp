@@ -43,11 +43,13 @@ int main(int argc, char** argv) {
       printHelp("fot_convert");
       return kExitOk;
     }
-    if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected an input and an output file (see -h)");
+    if (args.positional().size() != 2)
+      throw ToolError(kExitUsage, "expected an input and an output file (see -h)");
     const std::string &input = args.positional()[0], &output = args.positional()[1];
     const std::string out_ext = extension(output);
     if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".pcd" && out_ext != ".vtk")
-      throw ToolError(kExitUsage, "cannot write '" + output + "': the output must be .fot, .bt, .pcd or .vtk");
+      throw ToolError(kExitUsage,
+                      "cannot write '" + output + "': the output must be .fot, .bt, .pcd or .vtk");
     std::vector<double> origin{0, 0, 0};
     args.get("-origin", origin, 3);
     pcl::fot::io::VoxelExportOptions exported;
@@ -69,7 +71,8 @@ int main(int argc, char** argv) {
     pcl::fot::FastOctTree tree(1.0);
     if (in_ext == ".pcd" || in_ext == ".ply") {
       double res = 0;
-      if (!args.getPositive("-res", res)) throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
+      if (!args.getPositive("-res", res))
+        throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
       const auto cloud = loadCloud(input);
       tree = pcl::fot::FastOctTree(pcl::fot::VoxelGrid(res, origin[0], origin[1], origin[2]));
       const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
@@ -98,7 +101,8 @@ int main(int argc, char** argv) {
       what = std::to_string(pcl::fot::io::saveVoxelMeshVTK(tree, output, exported)) + " cube faces";
     }
     print_info("Wrote %s (%s: %llu occupied, %llu free cells) in %.0f ms\n", output.c_str(), what.c_str(),
-               (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(), timer.toc());
+               (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(),
+               timer.toc());
     return kExitOk;
   });
 }

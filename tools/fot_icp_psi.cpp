@@ -23,13 +23,16 @@ constexpr int kExitNotConverged = 3;
 
 void printHelp(const char* prog) {
   print_info(
-      "Aligns a source scan to a target scan with pcl::IterativeClosestPoint and prints, at the initial guess,\n"
+      "Aligns a source scan to a target scan with pcl::IterativeClosestPoint and prints, at the initial "
+      "guess,\n"
       "at every iteration and at convergence, the map similarity psi (mean Manhattan distance per occupied\n"
       "cell, in metres, each cell counting at most -max_range) next to ICP's getFitnessScore (mean squared\n"
       "distance of source points to their nearest target point).\n\n"
       "Syntax: %s source.pcd|.ply target.pcd|.ply [options]\n\n"
-      "  -guess <tx,ty,tz,yaw>  initial guess: a rotation of yaw radians about z, then a translation (default: 0,0,0,0)\n"
-      "  -leaf <m>              voxel-grid leaf both scans are downsampled with first (default: 0.1; 0: none)\n"
+      "  -guess <tx,ty,tz,yaw>  initial guess: a rotation of yaw radians about z, then a translation "
+      "(default: 0,0,0,0)\n"
+      "  -leaf <m>              voxel-grid leaf both scans are downsampled with first (default: 0.1; 0: "
+      "none)\n"
       "  -res <m>               psi's voxel edge (default: 0.1)\n"
       "  -max_range <m>         the most one cell's psi distance counts (default: 1)\n"
       "  -max_corr <m>          ICP's maximum correspondence distance (default: 0.5)\n"
@@ -63,7 +66,8 @@ int main(int argc, char** argv) {
       printHelp("fot_icp_psi");
       return kExitOk;
     }
-    if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected a source and a target point cloud (see -h)");
+    if (args.positional().size() != 2)
+      throw ToolError(kExitUsage, "expected a source and a target point cloud (see -h)");
     std::vector<double> guess{0, 0, 0, 0};
     args.get("-guess", guess, 4);
     double leaf = 0.1, res = 0.1, max_range = 1.0, max_corr = 0.5;
@@ -85,14 +89,16 @@ int main(int argc, char** argv) {
     icp.setMaximumIterations(iterations);
     icp.setMaxCorrespondenceDistance(max_corr);
 
-    const pcl::registration::TransformationValidationPsi<pcl::PointXYZ, pcl::PointXYZ> validation(res, max_range);
+    const pcl::registration::TransformationValidationPsi<pcl::PointXYZ, pcl::PointXYZ> validation(res,
+                                                                                                  max_range);
     print_info("%zu source and %zu target points; psi at %g m cells, capped at %g m\n", source->size(),
                target->size(), res, max_range);
     print_info("%-12s %12s %18s %16s\n", "", "psi [m]", "getFitnessScore", "corr. MSE");
     print_info("%-12s %12.5f\n", "guess", validation.validateTransformation(source, target, initial));
 
     // ICP hands the rejector each iteration's pose before the step: ψ and ICP's fitness there.
-    auto rejector = pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<pcl::PointXYZ>>(res, max_range);
+    auto rejector =
+        pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<pcl::PointXYZ>>(res, max_range);
     rejector->setCallback([&](std::size_t iteration, double psi, double mse) {
       print_info("iteration %-2zu %12.5f %18.6f %16.6f\n", iteration + 1, psi, icp.getFitnessScore(), mse);
     });

@@ -35,13 +35,15 @@ void describe(const std::string& path) {
     tree.forEachRegion([&](const pcl::fot::Region& r) {
       const std::int32_t last = std::int32_t((std::int64_t(1) << r.level) - 1);
       lo = {std::min(lo.x, r.min_key.x), std::min(lo.y, r.min_key.y), std::min(lo.z, r.min_key.z)};
-      hi = {std::max(hi.x, r.min_key.x + last), std::max(hi.y, r.min_key.y + last), std::max(hi.z, r.min_key.z + last)};
+      hi = {std::max(hi.x, r.min_key.x + last), std::max(hi.y, r.min_key.y + last),
+            std::max(hi.z, r.min_key.z + last)};
     });
     const double res = grid.resolution();
     print_info("  extent (keys)   %d %d %d  to  %d %d %d\n", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
     print_info("  extent (m)      %.3f %.3f %.3f  to  %.3f %.3f %.3f\n", grid.origin()[0] + lo.x * res,
-               grid.origin()[1] + lo.y * res, grid.origin()[2] + lo.z * res, grid.origin()[0] + (hi.x + 1) * res,
-               grid.origin()[1] + (hi.y + 1) * res, grid.origin()[2] + (hi.z + 1) * res);
+               grid.origin()[1] + lo.y * res, grid.origin()[2] + lo.z * res,
+               grid.origin()[0] + (hi.x + 1) * res, grid.origin()[1] + (hi.y + 1) * res,
+               grid.origin()[2] + (hi.z + 1) * res);
   }
   print_info("  depth           %u levels\n", tree.getDepth());
   print_info("  occupied cells  %llu\n", (unsigned long long)tree.getOccupiedCount());
@@ -59,7 +61,8 @@ int main(int argc, char** argv) {
       printHelp("fot_info");
       return kExitOk;
     }
-    if (args.positional().empty()) throw ToolError(kExitUsage, "expected one or more .fot or .bt maps (see -h)");
+    if (args.positional().empty())
+      throw ToolError(kExitUsage, "expected one or more .fot or .bt maps (see -h)");
     for (const std::string& path : args.positional()) describe(path);
     return kExitOk;
   });

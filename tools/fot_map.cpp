@@ -37,7 +37,8 @@ void printHelp(const char* prog) {
       "  -min_range <m>    points closer to the sensor are ignored (default: 0)\n"
       "  -out <prefix>     output prefix (default: fot_map); writes <prefix>.fot, <prefix>_occupied.pcd\n"
       "                    (voxel centres coloured by height) and <prefix>_mesh.vtk (voxel cubes)\n"
-      "  -free             also write <prefix>_states.pcd: occupied and free voxel centres, coloured by state\n"
+      "  -free             also write <prefix>_states.pcd: occupied and free voxel centres, coloured by "
+      "state\n"
       "  -h                this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read or written.\n",
       prog);
@@ -63,9 +64,12 @@ std::vector<Eigen::Affine3f> readPoses(const std::string& path) {
       v[i] = std::strtod(tokens[i].c_str(), &end);
       ok = *end == '\0' && std::isfinite(v[i]);
     }
-    if (!ok) throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": expected 7 numbers: tx ty tz qw qx qy qz");
+    if (!ok)
+      throw ToolError(kExitInput,
+                      path + ":" + std::to_string(number) + ": expected 7 numbers: tx ty tz qw qx qy qz");
     const Eigen::Quaternionf q{float(v[3]), float(v[4]), float(v[5]), float(v[6])};
-    if (!(q.norm() > 1e-6f)) throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": a zero quaternion");
+    if (!(q.norm() > 1e-6f))
+      throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": a zero quaternion");
     poses.push_back(Eigen::Translation3f(float(v[0]), float(v[1]), float(v[2])) * q.normalized());
   }
   return poses;
@@ -82,7 +86,8 @@ void progress(std::size_t done, std::size_t total, double seconds) {
 
 int main(int argc, char** argv) {
   return runTool("fot_map", [&] {
-    const Arguments args(argc, argv, {"-res", "-poses", "-max_range", "-min_range", "-out"}, {"-free", "-h", "--help"});
+    const Arguments args(argc, argv, {"-res", "-poses", "-max_range", "-min_range", "-out"},
+                         {"-free", "-h", "--help"});
     if (args.has("-h") || args.has("--help")) {
       printHelp("fot_map");
       return kExitOk;
@@ -126,15 +131,16 @@ int main(int argc, char** argv) {
     }
     progress(scans.size(), scans.size(), timer.toc() / 1000.0);
 
-    const std::string map_file = out + ".fot", centres_file = out + "_occupied.pcd", mesh_file = out + "_mesh.vtk";
+    const std::string map_file = out + ".fot", centres_file = out + "_occupied.pcd",
+                      mesh_file = out + "_mesh.vtk";
     pcl::fot::io::saveFot(tree, map_file);
     const std::size_t centres = pcl::fot::io::saveVoxelCentersPCD(tree, centres_file);
     const std::size_t faces = pcl::fot::io::saveVoxelMeshVTK(tree, mesh_file);
 
     print_info("Map summary\n");
     print_info("  scans              %zu\n", scans.size());
-    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n", total.rays,
-               (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
+    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n",
+               total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
     print_info("  resolution         %g m\n", tree.getResolution());
     print_info("  depth              %u levels\n", tree.getDepth());
     print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
@@ -151,7 +157,8 @@ int main(int argc, char** argv) {
       print_info("Wrote %s (%zu voxel centres, occupied and free)\n", free_file.c_str(),
                  pcl::fot::io::saveVoxelCentersPCD(tree, free_file, free_only));
     }
-    print_info("View them with: pcl_viewer %s   or   pcl_viewer %s\n", centres_file.c_str(), mesh_file.c_str());
+    print_info("View them with: pcl_viewer %s   or   pcl_viewer %s\n", centres_file.c_str(),
+               mesh_file.c_str());
     print_info("Done in %.0f ms\n", timer.toc());
     return kExitOk;
   });

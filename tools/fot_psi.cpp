@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
 
     auto mapOf = [&](const std::string& path, bool first) {
       if (isMapFile(path)) {
-        if (first && transformed) throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
+        if (first && transformed)
+          throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
         return loadMap(path);
       }
       const Cloud::Ptr cloud = loadCloud(path);

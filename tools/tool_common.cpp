@@ -25,7 +25,9 @@ bool looksLikeNumber(const std::string& s) {
 /** Silences PCL's console while a PCL reader runs: its errors come back to us as one line. */
 class QuietPcl {
  public:
-  QuietPcl() : level_(pcl::console::getVerbosityLevel()) { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
+  QuietPcl() : level_(pcl::console::getVerbosityLevel()) {
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  }
   ~QuietPcl() { pcl::console::setVerbosityLevel(level_); }
 
  private:
@@ -79,11 +81,13 @@ bool Arguments::get(const std::string& name, std::vector<double>& values, std::s
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0' || !std::isfinite(v))
-      throw ToolError(kExitUsage, "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
+      throw ToolError(kExitUsage,
+                      "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
     values.push_back(v);
   }
   if (values.size() != count)
-    throw ToolError(kExitUsage, "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
+    throw ToolError(kExitUsage,
+                    "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
   return true;
 }
 

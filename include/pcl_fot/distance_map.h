@@ -31,7 +31,8 @@ class DistanceMap {
 
  private:
   std::size_t index(const Key& k) const {
-    return std::size_t(k.x - min_key_.x) + side_ * (std::size_t(k.y - min_key_.y) + side_ * std::size_t(k.z - min_key_.z));
+    return std::size_t(k.x - min_key_.x) +
+           side_ * (std::size_t(k.y - min_key_.y) + side_ * std::size_t(k.z - min_key_.z));
   }
 
   std::size_t side_;

@@ -111,6 +111,16 @@ class VoxelGrid {
     return toKey(x, 0, key.x) && toKey(y, 1, key.y) && toKey(z, 2, key.z);
   }
 
+  /**
+   * pointToKey for a point given singly: throws std::invalid_argument, naming `who`, when it is not finite;
+   * false when it lies beyond the key range.
+   */
+  bool finitePointToKey(double x, double y, double z, Key& key, const char* who) const {
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+      throw std::invalid_argument(std::string(who) + ": the point is not finite");
+    return pointToKey(x, y, z, key);
+  }
+
   double keyToCoord(std::int32_t k, unsigned axis) const {
     return origin_[axis] + (double(k) + 0.5) * resolution_;
   }

@@ -24,17 +24,15 @@ namespace detail {
  * as soon as nothing outside the searched node can. Collapsed regions are searched as cubes, never
  * expanded in the tree.
  *
- * The Policy knows the query and the metric and keeps the result:
- *   using Distance;
- *   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const;
- *       // for the cube at `lo` with children of child_level: per axis, the query's distance to the lower (0)
- * and
- *       // upper (1) half, in the metric's units (squared for Euclidean). A child's lower bound sums its
- * halves'. Distance exterior(const std::uint32_t lo[3], unsigned level) const;  // the query's cube: nothing
- * outside is nearer bool worthVisiting(Distance lower_bound) const; bool settled(Distance exterior) const;
- *   bool wholeRegions() const;  // visit uniform cubes whole rather than cell by cell
- *   void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t rank);
- *   void visitCell(const std::uint32_t cell[3], std::uint64_t rank);
+ * The Policy knows the query and the metric and keeps the result. It provides:
+ * - `Distance`, the metric's type;
+ * - `childGaps(lo, child_level, gap)`: for the cube at `lo` with children of child_level, per axis, the
+ *   query's distance to the lower (gap[a][0]) and upper (gap[a][1]) half, in the metric's units (squared
+ *   for Euclidean); a child's lower bound sums its halves';
+ * - `exterior(lo, level)`: nothing outside the query's cube at `lo` lies nearer than this;
+ * - `worthVisiting(lower_bound)` and `settled(exterior)`: the pruning and stopping tests;
+ * - `wholeRegions()`: visit uniform cubes whole rather than cell by cell;
+ * - `visitRegion(lo, level, rank)` and `visitCell(cell, rank)`: a target cube or cell to consider.
  * Cubes are given in tree coordinates. `rank` numbers target cells in the tree's Morton order when the walk
  * is given `ranks` (the rank of the first target cell under each bitmap word, by pool offset), else 0.
  */
@@ -96,6 +94,32 @@ class NeighbourWalk {
       for (int j = i; j > 0 && c[j].bound < c[j - 1].bound; --j) std::swap(c[j], c[j - 1]);
   }
 
+  /** The octants in `mask` of the cube at `base` (children of level `sub`) that may still beat the result,
+   * nearest first; returns how many. */
+  int nearestFirst(const std::uint32_t base[3], unsigned sub, std::uint32_t mask, Child* c) const {
+    Distance gap[3][2];
+    policy_.childGaps(base, sub, gap);
+    int n = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      if (!((mask >> o) & 1u)) continue;
+      const Distance bound = childBound(gap, o);
+      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
+    }
+    order(c, n);
+    return n;
+  }
+
+  /** Octants of a reference word whose child may hold target cells. */
+  std::uint32_t childrenWithTargets(NodeWord w) const {
+    const std::size_t first = node::childBase(w);
+    std::uint32_t mask = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      const NodeWord child = words_[first + o];
+      if (!node::isBitmap(child) || node::octantMask(child, target_) != 0) mask |= 1u << o;
+    }
+    return mask;
+  }
+
   /** A node that holds the query: its children (or octants), except `skip`, nearest first, as the paper
    * orders them. */
   void searchAround(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3],
@@ -106,22 +130,10 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
-    Distance gap[3][2];
-    policy_.childGaps(base, sub, gap);
-    const std::uint32_t mask = bitmap ? node::octantMask(w, target_) : 0xFFu;
+    const std::uint32_t mask = bitmap ? node::octantMask(w, target_) : childrenWithTargets(w);
     const std::size_t first = bitmap ? 0 : node::childBase(w);
     Child c[8];
-    int n = 0;
-    for (unsigned o = 0; o < 8; ++o) {
-      if (o == skip || !((mask >> o) & 1u)) continue;
-      if (!bitmap) {
-        const NodeWord child = words_[first + o];
-        if (node::isBitmap(child) && node::octantMask(child, target_) == 0) continue;
-      }
-      const Distance bound = childBound(gap, o);
-      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
-    }
-    order(c, n);
+    const int n = nearestFirst(base, sub, mask & ~(skip < 8 ? 1u << skip : 0u), c);
     const std::uint64_t rank = (bitmap && ranks_) ? ranks_[offset] : 0;
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
@@ -168,16 +180,8 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
-    Distance gap[3][2];
-    policy_.childGaps(base, sub, gap);
     Child c[8];
-    int n = 0;
-    for (unsigned o = 0; o < 8; ++o) {
-      if (!((mask >> o) & 1u)) continue;
-      const Distance bound = childBound(gap, o);
-      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
-    }
-    order(c, n);
+    const int n = nearestFirst(base, sub, mask, c);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
@@ -191,17 +195,8 @@ class NeighbourWalk {
   void searchChildren(NodeWord w, unsigned level, const std::uint32_t base[3], unsigned skip) {
     const std::size_t first = node::childBase(w);
     const unsigned sub = level - 1;
-    Distance gap[3][2];
-    policy_.childGaps(base, sub, gap);
     Child c[8];
-    int n = 0;
-    for (unsigned o = 0; o < 8; ++o) {
-      const NodeWord child = words_[first + o];
-      if (o == skip || (node::isBitmap(child) && node::octantMask(child, target_) == 0)) continue;
-      const Distance bound = childBound(gap, o);
-      if (policy_.worthVisiting(bound)) c[n++] = Child{bound, o};
-    }
-    order(c, n);
+    const int n = nearestFirst(base, sub, childrenWithTargets(w) & ~(skip < 8 ? 1u << skip : 0u), c);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
@@ -221,12 +216,9 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
-    Distance gap[3][2];
-    policy_.childGaps(lo, sub, gap);
     Child c[8];
-    for (unsigned o = 0; o < 8; ++o) c[o] = Child{childBound(gap, o), o};
-    order(c, 8);
-    for (int i = 0; i < 8; ++i) {
+    const int n = nearestFirst(lo, sub, 0xFFu, c);
+    for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t child[3];
       childCorner(lo, sub, c[i].octant, child);

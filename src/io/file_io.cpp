@@ -54,8 +54,9 @@ std::string readFile(const std::string& path, std::size_t max_bytes) {
   const std::streamoff size = in.tellg();
   if (size < 0) fail("read", path, errno);
   if (std::uint64_t(size) > max_bytes)
-    throw std::length_error("pcl::fot::io: '" + path + "' has " + std::to_string(size) + " bytes, more than the " +
-                            std::to_string(max_bytes) + " a valid file of its kind can have here");
+    throw std::length_error("pcl::fot::io: '" + path + "' has " + std::to_string(size) +
+                            " bytes, more than the " + std::to_string(max_bytes) +
+                            " a valid file of its kind can have here");
   std::string bytes(std::size_t(size), '\0');
   in.seekg(0);
   if (!in.read(&bytes[0], size)) fail("read", path, errno);

@@ -30,7 +30,8 @@ void putDouble(std::string& out, double d) {
   put64(out, bits);
 }
 std::uint32_t get32(const unsigned char* p) {
-  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
+  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
+         std::uint32_t(p[3]) << 24;
 }
 std::uint64_t get64(const unsigned char* p) {
   return std::uint64_t(get32(p)) | std::uint64_t(get32(p + 4)) << 32;
@@ -71,7 +72,8 @@ std::string encodeFot(const FastOctTree& tree) {
   return out;
 }
 
-FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& name, std::size_t max_pool_bytes) {
+FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& name,
+                      std::size_t max_pool_bytes) {
   auto fail = [&](const std::string& what) -> FormatError {
     return FormatError("pcl::fot::io: '" + name + "' is not a valid .fot map: " + what);
   };
@@ -85,13 +87,15 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
                std::to_string(kFotVersion));
   if (header != kHeaderBytes) throw fail("a header of " + std::to_string(header) + " bytes, not 96");
   if (size < kHeaderBytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
-  const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32), oz = getDouble(p + 40);
+  const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32),
+               oz = getDouble(p + 40);
   if (!(res > 0) || !std::isfinite(res)) throw fail("the resolution is not positive and finite");
   if (!std::isfinite(ox) || !std::isfinite(oy) || !std::isfinite(oz)) throw fail("the origin is not finite");
   FastOctTree::CanonicalPool pool;
   pool.root_level = get32(p + 48);
   pool.root_base = {get32(p + 52), get32(p + 56), get32(p + 60)};
-  const std::uint64_t nodes = get64(p + 64), blocks = get64(p + 72), occupied = get64(p + 80), free = get64(p + 88);
+  const std::uint64_t nodes = get64(p + 64), blocks = get64(p + 72), occupied = get64(p + 80),
+                      free = get64(p + 88);
   if (blocks > node::kMaxBlocks) throw fail("it claims " + std::to_string(blocks) + " blocks");
   if (nodes != 1 + 8 * blocks) throw fail("the node count does not match the block count");
   // Sizes are checked against the real file before anything is allocated.
@@ -101,14 +105,15 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
                std::to_string(max_pool_bytes));
   const std::uint64_t expected = kHeaderBytes + pool_bytes + kChecksumBytes;
   if (size != expected)
-    throw fail(std::string(size < expected ? "it is truncated: " : "it has trailing bytes: ") + std::to_string(size) +
-               " bytes where the header promises " + std::to_string(expected));
+    throw fail(std::string(size < expected ? "it is truncated: " : "it has trailing bytes: ") +
+               std::to_string(size) + " bytes where the header promises " + std::to_string(expected));
   if (crc32(bytes, size - kChecksumBytes) != get32(p + size - kChecksumBytes))
     throw fail("the checksum does not match: the file is corrupted");
   pool.words.resize(std::size_t(blocks + 1) * 8);
   for (std::size_t i = 0; i < pool.words.size(); ++i) pool.words[i] = get32(p + kHeaderBytes + 4 * i);
   try {
-    FastOctTree tree = FastOctTree::fromCanonicalPool(VoxelGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
+    FastOctTree tree =
+        FastOctTree::fromCanonicalPool(VoxelGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
     if (tree.getOccupiedCount() != occupied || tree.getFreeCount() != free)
       throw fail("the cell counts in the header do not match the tree");
     return tree;

@@ -28,10 +28,10 @@ std::int32_t cellsFromZero(double origin, double res, const char* axis) {
   const double cells = origin / res;
   const double whole = std::round(cells);
   if (!(std::abs(cells - whole) <= 1e-6) || std::abs(whole) > double(kMaxKey))
-    throw std::invalid_argument(std::string("pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the "
-                                            "resolution, but the map's origin ") +
-                                axis + " = " + std::to_string(origin) + " is " + std::to_string(cells) +
-                                " cells from 0");
+    throw std::invalid_argument(
+        std::string("pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the "
+                    "resolution, but the map's origin ") +
+        axis + " = " + std::to_string(origin) + " is " + std::to_string(cells) + " cells from 0");
   return std::int32_t(whole);
 }
 
@@ -42,9 +42,11 @@ void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t sh
     const std::int64_t lo[3] = {r.min_key.x + shift[0], r.min_key.y + shift[1], r.min_key.z + shift[2]};
     for (std::int64_t c : lo)
       if (c < kMinKey || c + last > kMaxKey)
-        throw std::invalid_argument("pcl::fot::io: the cells lie beyond the key range once moved to the origin");
+        throw std::invalid_argument(
+            "pcl::fot::io: the cells lie beyond the key range once moved to the origin");
     to.setBox(Key{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])},
-              Key{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)}, r.state);
+              Key{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)},
+              r.state);
   });
 }
 
@@ -163,8 +165,9 @@ std::string encodeBt(const FastOctTree& tree) {
     const std::int64_t k[3] = {r.min_key.x, r.min_key.y, r.min_key.z};
     for (int a = 0; a < 3; ++a)
       if (k[a] + shift_to_octomap[a] < 0 || k[a] + last + shift_to_octomap[a] > 65535)
-        throw std::invalid_argument("pcl::fot::io: the map has cells beyond OctoMap's 65536 cells per axis (" +
-                                    std::to_string(kCentre) + " cells either side of coordinate 0)");
+        throw std::invalid_argument(
+            "pcl::fot::io: the map has cells beyond OctoMap's 65536 cells per axis (" +
+            std::to_string(kCentre) + " cells either side of coordinate 0)");
   });
   // Staging keys are OctoMap keys minus 0xAAAA (see kStagingBase).
   const std::int64_t shift[3] = {shift_to_octomap[0] - 0xAAAA, shift_to_octomap[1] - 0xAAAA,
@@ -184,7 +187,8 @@ std::string encodeBt(const FastOctTree& tree) {
   std::string out = std::string(kFirstLine) +
                     "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
                     "id OcTree\nsize " +
-                    std::to_string(staging.empty() ? 0 : writer.nodes()) + "\nres " + exactDecimal(res) + "\ndata\n";
+                    std::to_string(staging.empty() ? 0 : writer.nodes()) + "\nres " + exactDecimal(res) +
+                    "\ndata\n";
   return out + writer.body();
 }
 
@@ -192,7 +196,8 @@ void saveBt(const FastOctTree& tree, const std::string& path) {
   writeFileAtomically(path, encodeBt(tree));
 }
 
-FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name, const BtImportOptions& options) {
+FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name,
+                     const BtImportOptions& options) {
   auto fail = [&](const std::string& what) {
     return FormatError("pcl::fot::io: '" + name + "' is not a valid OctoMap .bt file: " + what);
   };
@@ -209,7 +214,8 @@ FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& nam
   };
   std::string text;
   line(text);
-  if (text.compare(0, sizeof(kFirstLine) - 1, kFirstLine) != 0) throw fail("it does not start with '" + std::string(kFirstLine) + "'");
+  if (text.compare(0, sizeof(kFirstLine) - 1, kFirstLine) != 0)
+    throw fail("it does not start with '" + std::string(kFirstLine) + "'");
   std::string id;
   double res = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t declared = 0;
@@ -237,7 +243,8 @@ FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& nam
   if (!(res > 0) || !std::isfinite(res)) throw fail("the resolution is not positive and finite");
   const std::size_t body = size - at;
   // Each inner node takes 2 bytes and has at most 8 children.
-  if (declared > 1 + 4 * std::uint64_t(body)) throw fail("the size " + std::to_string(declared) + " cannot fit the file");
+  if (declared > 1 + 4 * std::uint64_t(body))
+    throw fail("the size " + std::to_string(declared) + " cannot fit the file");
 
   const std::int32_t origin_cells[3] = {cellsFromZero(options.origin[0], res, "x"),
                                         cellsFromZero(options.origin[1], res, "y"),

@@ -64,8 +64,8 @@ class Colors {
  public:
   Colors(const std::vector<Cell>& cells, VoxelColoring coloring) : coloring_(coloring) {
     if (cells.empty()) return;
-    const auto mm =
-        std::minmax_element(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) { return a.z < b.z; });
+    const auto mm = std::minmax_element(cells.begin(), cells.end(),
+                                        [](const Cell& a, const Cell& b) { return a.z < b.z; });
     zmin_ = mm.first->z;
     zmax_ = std::max(mm.second->z, zmin_ + 1e-6f);
   }
@@ -111,9 +111,11 @@ std::size_t saveVoxelCentersPCD(const FastOctTree& tree, const std::string& path
   return cells.size();
 }
 
-std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path, const VoxelExportOptions& options) {
+std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path,
+                             const VoxelExportOptions& options) {
   const std::vector<Cell> cells = exportedCells(tree, options, "saveVoxelMeshVTK");
-  const Colors color(cells, options.coloring == VoxelColoring::None ? VoxelColoring::Height : options.coloring);
+  const Colors color(cells,
+                     options.coloring == VoxelColoring::None ? VoxelColoring::Height : options.coloring);
   const VoxelGrid& grid = tree.getGrid();
   const double res = grid.resolution();
   // The 6 faces of a unit cube: the neighbour's offset and the corners, counter-clockwise seen from outside.
@@ -121,10 +123,12 @@ std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path, c
     int dx, dy, dz;
     int corners[4][3];
   };
-  static const Face faces[6] = {
-      {-1, 0, 0, {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}}}, {1, 0, 0, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}},
-      {0, -1, 0, {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}}, {0, 1, 0, {{0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}}},
-      {0, 0, -1, {{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}}}, {0, 0, 1, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}}};
+  static const Face faces[6] = {{-1, 0, 0, {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}}},
+                                {1, 0, 0, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}},
+                                {0, -1, 0, {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}},
+                                {0, 1, 0, {{0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}}},
+                                {0, 0, -1, {{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}}},
+                                {0, 0, 1, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}}};
   ConstAccessor neighbours(tree);
   auto exported = [&](CellState s) {
     return s == CellState::Occupied || (options.include_free && s == CellState::Free);
@@ -150,9 +154,10 @@ std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path, c
     }
   }
   const std::string faces_n = std::to_string(n), points_n = std::to_string(4 * n);
-  std::string bytes = "# vtk DataFile Version 3.0\npcl_fot voxels\nBINARY\nDATASET POLYDATA\nPOINTS " + points_n +
-                      " float\n" + points + "\nPOLYGONS " + faces_n + " " + std::to_string(5 * n) + "\n" + polygons +
-                      "\nPOINT_DATA " + points_n + "\nCOLOR_SCALARS Colors 3\n" + colors + "\n";
+  std::string bytes = "# vtk DataFile Version 3.0\npcl_fot voxels\nBINARY\nDATASET POLYDATA\nPOINTS " +
+                      points_n + " float\n" + points + "\nPOLYGONS " + faces_n + " " + std::to_string(5 * n) +
+                      "\n" + polygons + "\nPOINT_DATA " + points_n + "\nCOLOR_SCALARS Colors 3\n" + colors +
+                      "\n";
   writeFileAtomically(path, bytes);
   return n;
 }

@@ -45,7 +45,8 @@ MapPair scanPair(const BenchScan& a, const BenchScan& b, double res, const Eigen
   const pcl::fot::VoxelGrid grid(res);
   Cloud moved;
   pcl::transformPointCloud(*b.cloud, moved, b_pose);
-  return {format("%s (%.2f m)", label.c_str(), res), res, occupiedKeys(*a.cloud, grid), occupiedKeys(moved, grid)};
+  return {format("%s (%.2f m)", label.c_str(), res), res, occupiedKeys(*a.cloud, grid),
+          occupiedKeys(moved, grid)};
 }
 
 pcl::fot::FastOctTree treeOf(const std::vector<Key>& keys, const pcl::fot::VoxelGrid& grid) {
@@ -103,7 +104,8 @@ struct Centres {
     return false;
   }
 };
-using NanoL1 = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L1_Adaptor<float, Centres>, Centres, 3, unsigned>;
+using NanoL1 =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L1_Adaptor<float, Centres>, Centres, 3, unsigned>;
 
 /** ψ's two directed sums with nanoflann L1 trees, built from the voxel centres. */
 double nanoflannPsi(const Centres& a, const Centres& b) {
@@ -133,23 +135,29 @@ std::string tableV(const std::vector<MapPair>& pairs, int dmap_repeats, std::vec
     worst = std::min(worst, speedup);
     best = std::max(best, speedup);
     t.add({p.name, format("%zu / %zu", p.a.size(), p.b.size()), format("%.3f", mean(times.tree)),
-           format("%.5f", variance(times.tree)), format("%.0f", mean(times.dmap)), format("%.0f", variance(times.dmap)),
-           format("**%.0f×**", speedup), times.tree_sum == times.dmap_sum ? "yes" : "**NO**"});
+           format("%.5f", variance(times.tree)), format("%.0f", mean(times.dmap)),
+           format("%.0f", variance(times.dmap)), format("**%.0f×**", speedup),
+           times.tree_sum == times.dmap_sum ? "yes" : "**NO**"});
   }
-  verdicts.push_back(format("Table V: tree ψ is **%.0f× to %.0f×** faster than dmap_v at 1024³ on the real scans "
-                            "(target 10,000×; the paper: 1,376× to 39,255×).",
-                            worst, best));
+  verdicts.push_back(
+      format("Table V: tree ψ is **%.0f× to %.0f×** faster than dmap_v at 1024³ on the real scans "
+             "(target 10,000×; the paper: 1,376× to 39,255×).",
+             worst, best));
   return format(
              "### Real scans (paper Table V)\n\n"
-             "Pairs of scans of one scene, as the paper compares consecutive frames. The Kinect frames in their own "
-             "frames (the camera barely moved); room_scan2 placed on room_scan1 by the NDT tutorial's initial guess. "
-             "Times are the mean and variance (ms²) of 5 tree ψ runs and %d dmap_v runs; dmap_v builds both maps' "
+             "Pairs of scans of one scene, as the paper compares consecutive frames. The Kinect frames in "
+             "their own "
+             "frames (the camera barely moved); room_scan2 placed on room_scan1 by the NDT tutorial's "
+             "initial guess. "
+             "Times are the mean and variance (ms²) of 5 tree ψ runs and %d dmap_v runs; dmap_v builds both "
+             "maps' "
              "distance maps on the 1024³ grid (2 GiB each) and reads them off at the other map's cells.\n\n",
              dmap_repeats) +
          t.markdown();
 }
 
-std::string versusNanoflann(const std::vector<MapPair>& pairs, int repeats, std::vector<std::string>& verdicts) {
+std::string versusNanoflann(const std::vector<MapPair>& pairs, int repeats,
+                            std::vector<std::string>& verdicts) {
   Table t({"maps", "cells a / b", "tree ψ ms", "tree ψ, 2 threads ms", "nanoflann L1 ms", "nanoflann / tree",
            "same ψ"});
   double worst = 1e300;
@@ -177,13 +185,16 @@ std::string versusNanoflann(const std::vector<MapPair>& pairs, int repeats, std:
            format("%.2f", median(threaded)), format("%.2f", median(nano)), format("**%.2f×**", ratio),
            sum == std::uint64_t(nano_sum) && sum == sum_threaded ? "yes" : "**NO**"});
   }
-  verdicts.push_back(format("Tree ψ against the same sums with nanoflann L1 (build included): at least **%.2f×** "
-                            "faster (target 2×).",
-                            worst));
+  verdicts.push_back(
+      format("Tree ψ against the same sums with nanoflann L1 (build included): at least **%.2f×** "
+             "faster (target 2×).",
+             worst));
   return format(
              "### Against nanoflann\n\n"
-             "The same ψ as two nanoflann L1 k-d trees give it: each map's voxel centres (in cell units) indexed, "
-             "then 1-NN of every cell of the other map; index build included, extracting the centres not. Medians "
+             "The same ψ as two nanoflann L1 k-d trees give it: each map's voxel centres (in cell units) "
+             "indexed, "
+             "then 1-NN of every cell of the other map; index build included, extracting the centres not. "
+             "Medians "
              "of %d runs. The tree ψ reads the maps as they are.\n\n",
              repeats) +
          t.markdown();
@@ -219,7 +230,8 @@ std::string figure5(int repeats, const std::string& plot_file, std::vector<std::
              "'' using 1:3 with linespoints title 'dmap_v (ms)', "
              "'' using 1:4 with linespoints title 'speed-up dmap_v / tree'\n",
              plot_file.c_str(), data_file.c_str()));
-  const std::string command = "gnuplot '" + script_file + "' && mv '" + plot_file + ".tmp' '" + plot_file + "'";
+  const std::string command =
+      "gnuplot '" + script_file + "' && mv '" + plot_file + ".tmp' '" + plot_file + "'";
   if (std::system(command.c_str()) == 0) {
     plot = format("![ψ on random maps](%s)\n\n", plot_file.substr(plot_file.rfind('/') + 1).c_str());
   } else {
@@ -240,7 +252,8 @@ const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& na
 
 }  // namespace
 
-std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats, const std::string& plot_file) {
+std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats,
+                     const std::string& plot_file) {
   const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
   const Eigen::Affine3f ndt_guess =
       Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) * Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
@@ -256,7 +269,9 @@ std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_
 
   std::vector<std::string> verdicts;
   std::string out = "## Map similarity ψ (paper §IV–V)\n\n";
-  out += "ψ of two binary maps (occupied cells), exact: each table checks that every method gives the same sum.\n\n";
+  out +=
+      "ψ of two binary maps (occupied cells), exact: each table checks that every method gives the same "
+      "sum.\n\n";
   out += tableV(pairs, dmap_repeats, verdicts) + "\n";
   out += versusNanoflann(pairs, repeats, verdicts) + "\n";
   out += figure5(repeats, plot_file, verdicts) + "\n";

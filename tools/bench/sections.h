@@ -12,6 +12,7 @@ std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats);
 std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats);
 std::string benchSearch(const std::vector<BenchScan>& scans, int repeats);
 /** Also plots Fig. 5 into plot_file (PNG, with gnuplot), which the Markdown links by its file name. */
-std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats, const std::string& plot_file);
+std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats,
+                     const std::string& plot_file);
 
 }  // namespace fot_bench

@@ -31,7 +31,8 @@ std::size_t saveVoxelCentersPCD(const FastOctTree& tree, const std::string& path
  * per face between an exported voxel and one that is not (inner faces are left out), coloured per point.
  * The write is atomic. Returns the number of faces; throws as saveVoxelCentersPCD.
  */
-std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path, const VoxelExportOptions& options = {});
+std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path,
+                             const VoxelExportOptions& options = {});
 
 }  // namespace io
 }  // namespace fot

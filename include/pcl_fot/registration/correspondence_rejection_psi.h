@@ -91,7 +91,8 @@ void CorrespondenceRejectorPsi<PointT>::applyRejection(pcl::Correspondences& cor
  * recorded is below an absolute threshold (reported as CONVERGENCE_CRITERIA_ABS_MSE), or improved on the
  * one before by less than a relative fraction (reported as CONVERGENCE_CRITERIA_REL_MSE). Install it in
  * place of ICP's own, from which it takes ICP's counters:
- *   icp.convergence_criteria_ = pcl::make_shared<PsiConvergenceCriteria<float>>(*icp.getConvergeCriteria(), rejector_history);
+ *   icp.convergence_criteria_ = pcl::make_shared<PsiConvergenceCriteria<float>>(*icp.getConvergeCriteria(),
+ * rejector_history);
  */
 template <typename Scalar = float>
 class PsiConvergenceCriteria : public DefaultConvergenceCriteria<Scalar> {
@@ -113,7 +114,8 @@ class PsiConvergenceCriteria : public DefaultConvergenceCriteria<Scalar> {
       this->setConvergenceState(Base::CONVERGENCE_CRITERIA_ABS_MSE);
       return true;
     }
-    if (n >= 2 && history_[n - 2] > 0 && history_[n - 2] - history_[n - 1] < relative_improvement_ * history_[n - 2] &&
+    if (n >= 2 && history_[n - 2] > 0 &&
+        history_[n - 2] - history_[n - 1] < relative_improvement_ * history_[n - 2] &&
         history_[n - 1] <= history_[n - 2]) {
       this->setConvergenceState(Base::CONVERGENCE_CRITERIA_REL_MSE);
       return true;

@@ -34,7 +34,8 @@ class TransformationValidationPsi : public TransformationValidation<PointSource,
   using typename Base::PointCloudSourceConstPtr;
   using typename Base::PointCloudTargetConstPtr;
 
-  /** `resolution`: the cell edge in metres; `max_range`: the most one cell's distance counts (≤ 0: no cap). */
+  /** `resolution`: the cell edge in metres; `max_range`: the most one cell's distance counts (≤ 0: no cap).
+   */
   explicit TransformationValidationPsi(double resolution = 0.05, double max_range = 1.0);
 
   void setResolution(double resolution);
@@ -46,10 +47,12 @@ class TransformationValidationPsi : public TransformationValidation<PointSource,
   double getThreshold() const { return threshold_; }
 
   /** The mean ψ distance per cell in metres; DBL_MAX when either cloud has no finite point. */
-  double validateTransformation(const PointCloudSourceConstPtr& cloud_src, const PointCloudTargetConstPtr& cloud_tgt,
+  double validateTransformation(const PointCloudSourceConstPtr& cloud_src,
+                                const PointCloudTargetConstPtr& cloud_tgt,
                                 const Matrix4& transformation_matrix) const override;
   /** The whole ψ result behind validateTransformation(); undefined when either cloud has no finite point. */
-  pcl::fot::PsiResult score(const PointCloudSourceConstPtr& cloud_src, const PointCloudTargetConstPtr& cloud_tgt,
+  pcl::fot::PsiResult score(const PointCloudSourceConstPtr& cloud_src,
+                            const PointCloudTargetConstPtr& cloud_tgt,
                             const Matrix4& transformation_matrix) const;
 
   /** True if score1 is better (lower) than score2. */

@@ -58,15 +58,20 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   /** PCL's batch searches, over setNumberOfThreads() threads; the results do not depend on the count. */
   void nearestKSearch(const PointCloud& cloud, const Indices& indices, int k, std::vector<Indices>& k_indices,
                       std::vector<std::vector<float>>& k_sqr_distances) const override;
-  void radiusSearch(const PointCloud& cloud, const Indices& indices, double radius, std::vector<Indices>& k_indices,
-                    std::vector<std::vector<float>>& k_sqr_distances, unsigned int max_nn = 0) const override;
+  void radiusSearch(const PointCloud& cloud, const Indices& indices, double radius,
+                    std::vector<Indices>& k_indices, std::vector<std::vector<float>>& k_sqr_distances,
+                    unsigned int max_nn = 0) const override;
 
   /**
    * Threads for the batch searches: 1 (the default) runs them in the caller's thread, 0 takes every hardware
    * thread. Single queries are safe from many threads at once in any case.
    */
-  void setNumberOfThreads(unsigned threads) { threads_ = threads; }
-  unsigned getNumberOfThreads() const { return threads_; }
+  void setNumberOfThreads(unsigned threads) {
+    threads_ = threads;
+  }
+  unsigned getNumberOfThreads() const {
+    return threads_;
+  }
 
   void setMetric(Metric metric) {
     metric_ = metric;

@@ -16,7 +16,7 @@ namespace registration {
 
 template <typename PointSource, typename PointTarget, typename Scalar>
 TransformationValidationPsi<PointSource, PointTarget, Scalar>::TransformationValidationPsi(double resolution,
-                                                                                          double max_range)
+                                                                                           double max_range)
     : resolution_(resolution), max_range_(max_range) {
   pcl::fot::VoxelGrid check(resolution);  // throws for a resolution that is not positive and finite
   (void)check;
@@ -32,10 +32,13 @@ void TransformationValidationPsi<PointSource, PointTarget, Scalar>::setResolutio
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-std::shared_ptr<const pcl::fot::FastOctTree> TransformationValidationPsi<PointSource, PointTarget, Scalar>::targetTree(
+std::shared_ptr<const pcl::fot::FastOctTree>
+TransformationValidationPsi<PointSource, PointTarget, Scalar>::targetTree(
     const PointCloudTargetConstPtr& cloud_tgt) const {
   const std::uint64_t fingerprint =
-      cloud_tgt->empty() ? 0 : pcl::fot::cloudFingerprint(&(*cloud_tgt)[0].x, cloud_tgt->size(), sizeof(PointTarget));
+      cloud_tgt->empty()
+          ? 0
+          : pcl::fot::cloudFingerprint(&(*cloud_tgt)[0].x, cloud_tgt->size(), sizeof(PointTarget));
   std::lock_guard<std::mutex> lock(cache_mutex_);
   if (!cached_tree_ || cached_cloud_ != cloud_tgt.get() || cached_fingerprint_ != fingerprint) {
     auto tree = std::make_shared<pcl::fot::FastOctTree>(resolution_);
@@ -51,7 +54,8 @@ template <typename PointSource, typename PointTarget, typename Scalar>
 pcl::fot::PsiResult TransformationValidationPsi<PointSource, PointTarget, Scalar>::score(
     const PointCloudSourceConstPtr& cloud_src, const PointCloudTargetConstPtr& cloud_tgt,
     const Matrix4& transformation_matrix) const {
-  if (!cloud_src || !cloud_tgt) throw std::invalid_argument("pcl::registration::TransformationValidationPsi: no cloud");
+  if (!cloud_src || !cloud_tgt)
+    throw std::invalid_argument("pcl::registration::TransformationValidationPsi: no cloud");
   const std::shared_ptr<const pcl::fot::FastOctTree> target = targetTree(cloud_tgt);
   pcl::PointCloud<PointSource> moved;
   pcl::transformPointCloud(*cloud_src, moved, transformation_matrix);
@@ -79,11 +83,13 @@ double TransformationValidationPsi<PointSource, PointTarget, Scalar>::validateTr
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-bool TransformationValidationPsi<PointSource, PointTarget, Scalar>::isValid(const PointCloudSourceConstPtr& cloud_src,
-                                                                           const PointCloudTargetConstPtr& cloud_tgt,
-                                                                           const Matrix4& transformation_matrix) const {
+bool TransformationValidationPsi<PointSource, PointTarget, Scalar>::isValid(
+    const PointCloudSourceConstPtr& cloud_src, const PointCloudTargetConstPtr& cloud_tgt,
+    const Matrix4& transformation_matrix) const {
   if (std::isnan(threshold_)) {
-    PCL_ERROR("[pcl::registration::TransformationValidationPsi::isValid] The threshold is unset: call setThreshold.\n");
+    PCL_ERROR(
+        "[pcl::registration::TransformationValidationPsi::isValid] The threshold is unset: call "
+        "setThreshold.\n");
     return false;
   }
   return validateTransformation(cloud_src, cloud_tgt, transformation_matrix) < threshold_;

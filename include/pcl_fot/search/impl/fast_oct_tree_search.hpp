@@ -23,8 +23,8 @@ typename FastOctTreeSearch<PointT>::Source FastOctTreeSearch<PointT>::describe(
     const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const {
   Source s{cloud.get(), indices.get(), cloud ? cloud->size() : 0, 0};
   if (cloud && !cloud->empty())
-    s.fingerprint = cloudFingerprint(&(*cloud)[0].x, cloud->size(), sizeof(PointT), indices ? indices->data() : nullptr,
-                                     indices ? indices->size() : 0);
+    s.fingerprint = cloudFingerprint(&(*cloud)[0].x, cloud->size(), sizeof(PointT),
+                                     indices ? indices->data() : nullptr, indices ? indices->size() : 0);
   return s;
 }
 
@@ -77,7 +77,8 @@ template <typename PointT>
 template <typename Query>
 void FastOctTreeSearch<PointT>::forEachQuery(std::size_t n, Query&& query) const {
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const std::size_t workers = std::min<std::size_t>(threads_ ? threads_ : hardware, std::max<std::size_t>(n, 1));
+  const std::size_t workers =
+      std::min<std::size_t>(threads_ ? threads_ : hardware, std::max<std::size_t>(n, 1));
   // Contiguous runs keep each thread's queries together in space, as its LineBurst path likes them.
   auto run = [&](std::size_t w) {
     for (std::size_t i = n * w / workers, end = n * (w + 1) / workers; i < end; ++i) query(i);
@@ -109,8 +110,8 @@ void FastOctTreeSearch<PointT>::radiusSearch(const PointCloud& cloud, const Indi
   k_indices.resize(n);
   k_sqr_distances.resize(n);
   forEachQuery(n, [&](std::size_t i) {
-    radiusSearch(cloud[indices.empty() ? i : std::size_t(indices[i])], radius, k_indices[i], k_sqr_distances[i],
-                 max_nn);
+    radiusSearch(cloud[indices.empty() ? i : std::size_t(indices[i])], radius, k_indices[i],
+                 k_sqr_distances[i], max_nn);
   });
 }
 
