@@ -1,7 +1,6 @@
 #include "brick_distance.h"
 
 #include <algorithm>
-#include <cstring>
 
 namespace pcl {
 namespace fot {
@@ -46,7 +45,7 @@ const PartCache::Entry& PartCache::part(std::uint32_t x, std::uint32_t y, std::u
 
 template <unsigned Reach>
 bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
-  Row* r = rows(current_);
+  Row* r = rows(kTargets);
   std::fill(r, r + kWindow * kWindow, Row(0));
   bool any = false;
   constexpr unsigned kParts = kWindow / 8;
@@ -67,9 +66,10 @@ bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
 }
 
 template <unsigned Reach>
-void BrickWindow<Reach>::dilate(unsigned step) {
-  const Row* in = rows(current_);
-  Row* out = rows(current_ ^ 1);
+auto BrickWindow<Reach>::dilate(unsigned step) -> const Row* {
+  // Step 1 reads the tree's cells, later steps the buffer the previous one wrote.
+  const Row* in = rows(step == 1 ? kTargets : (step & 1u));
+  Row* out = rows((step & 1u) ^ 1u);
   // Errors from the unseen outside move inwards one row per step: later steps read only [step, kWindow -
   // step).
   for (unsigned z = step; z < kWindow - step; ++z)
@@ -78,45 +78,7 @@ void BrickWindow<Reach>::dilate(unsigned step) {
       const Row c = in[i];
       out[i] = c | Row(c << 1) | Row(c >> 1) | in[i - 1] | in[i + 1] | in[i - kWindow] | in[i + kWindow];
     }
-  current_ ^= 1;
-}
-
-template <unsigned Reach>
-unsigned BrickWindow<Reach>::take(Brick& cells) {
-  const Row* r = rows(current_);
-  unsigned n = 0;
-  for (unsigned w = 0; w < Brick::kWords; ++w) {
-    if (!cells.bits[w]) continue;
-    std::uint64_t met = 0;
-    for (unsigned q = 0; q < Brick::kRowsPerWord; ++q) {
-      const unsigned row = w * Brick::kRowsPerWord + q, y = row % kSide, z = row / kSide;
-      met |= std::uint64_t((r[(Reach + z) * kWindow + Reach + y] >> Reach) & 0xFFFFu) << (kSide * q);
-    }
-    const std::uint64_t hit = cells.bits[w] & met;
-    cells.bits[w] &= ~hit;
-    n += popcount64(hit);
-  }
-  return n;
-}
-
-template <unsigned Reach>
-std::uint64_t BrickWindow<Reach>::settle(PartCache& parts, const std::uint32_t corner[3], Brick& cells,
-                                         unsigned from, std::int64_t cap) {
-  const std::uint32_t lo[3] = {corner[0] - Reach, corner[1] - Reach, corner[2] - Reach};
-  const unsigned last = unsigned(std::min<std::int64_t>(cap, Reach));
-  std::uint64_t sum = 0;
-  if (load(parts, lo)) {
-    if (from == 0) take(cells);
-    for (unsigned d = 1; d <= last && cells.any(); ++d) {
-      dilate(d);
-      if (d >= from) sum += std::uint64_t(d) * take(cells);
-    }
-  }
-  if (cap <= std::int64_t(Reach)) {  // every cell left is at least cap away
-    sum += std::uint64_t(cap) * cells.count();
-    cells = Brick{};
-  }
-  return sum;
+  return out;
 }
 
 template class BrickWindow<8>;

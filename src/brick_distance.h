@@ -1,9 +1,12 @@
 #pragma once
 // Private to the library: ψ's exact Manhattan distances for a brick of cells at a time, by bit dilation.
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <stdexcept>
 #include <type_traits>
 #include <vector>
 
@@ -26,6 +29,7 @@ inline unsigned popcount64(std::uint64_t x) {
 template <unsigned Side>
 struct BitCube {
   static_assert(Side == 8 || Side == 16, "a row must divide a 64-bit word");
+  static constexpr unsigned kSide = Side;
   static constexpr unsigned kWords = Side * Side * Side / 64;
   static constexpr unsigned kRowsPerWord = 64 / Side;
 
@@ -128,27 +132,123 @@ class BrickWindow {
   static_assert(Reach % 8 == 0 && kWindow <= 64, "the window is made of whole parts, a row of one word");
   using Row = typename std::conditional<kWindow <= 32, std::uint32_t, std::uint64_t>::type;
 
-  BrickWindow() : rows_(2 * kWindow * kWindow) {}
+  BrickWindow() : rows_(3 * kWindow * kWindow) {}
 
   /**
-   * The sum of the distances of `cells`, the brick whose lowest corner is `corner` (tree coordinates),
-   * each capped at `cap`, for the cells within Reach. Every cell is known to be at least `from` away.
-   * Removes the cells it settled from `cells`: any left are further than Reach (and cap > Reach).
+   * Settles the cells of `cells`, the brick whose lowest corner is `corner` (tree coordinates), that lie
+   * between `from` and `last` (at most Reach) cells from the tree's: removes them from `cells` and calls
+   * met(d, w, bits) with the bits of brick word w found at distance d. The cells left are further than
+   * `last`. Afterwards holds() answers for the window.
    */
-  std::uint64_t settle(PartCache& parts, const std::uint32_t corner[3], Brick& cells, unsigned from,
-                       std::int64_t cap);
+  template <typename Met>
+  void settle(PartCache& parts, const std::uint32_t corner[3], Brick& cells, unsigned from, unsigned last,
+              Met&& met) {
+    const std::uint32_t lo[3] = {corner[0] - Reach, corner[1] - Reach, corner[2] - Reach};
+    if (!load(parts, lo)) return;
+    for (unsigned d = 0; d <= last && cells.any(); ++d) {
+      const Row* r = d == 0 ? rows(kTargets) : dilate(d);
+      if (d >= from) take(r, d, cells, met);
+    }
+  }
+
+  /** Whether the tree holds the cell at (x, y, z), in window coordinates: Reach + the brick's own. */
+  bool holds(unsigned x, unsigned y, unsigned z) const {
+    return (rows_[kTargets * kWindow * kWindow + z * kWindow + y] >> x) & 1u;
+  }
 
  private:
+  static constexpr unsigned kTargets = 2;  // the buffer holding the tree's cells; 0 and 1 hold dilations
+
   Row* rows(unsigned buffer) { return rows_.data() + buffer * kWindow * kWindow; }
   /** Reads the window whose lowest corner is `lo`; false if the tree has no cell in it. */
   bool load(PartCache& parts, const std::uint32_t lo[3]);
-  /** Dilates once; only the rows that later steps still read are computed. */
-  void dilate(unsigned step);
-  /** Removes and counts the cells of `cells` that meet the current rows. */
-  unsigned take(Brick& cells);
+  /** Dilates once more, to step `step`, and returns the rows; only those later steps still read are
+   * computed. */
+  const Row* dilate(unsigned step);
 
-  std::vector<Row> rows_;  // two buffers of kWindow × kWindow rows, [z][y], bit x
-  unsigned current_ = 0;
+  template <typename Met>
+  void take(const Row* r, unsigned d, Brick& cells, Met& met) {
+    for (unsigned w = 0; w < Brick::kWords; ++w) {
+      if (!cells.bits[w]) continue;
+      std::uint64_t near = 0;
+      for (unsigned q = 0; q < Brick::kRowsPerWord; ++q) {
+        const unsigned row = w * Brick::kRowsPerWord + q, y = row % kSide, z = row / kSide;
+        near |= std::uint64_t((r[(Reach + z) * kWindow + Reach + y] >> Reach) & 0xFFFFu) << (kSide * q);
+      }
+      const std::uint64_t hit = cells.bits[w] & near;
+      if (!hit) continue;
+      cells.bits[w] &= ~hit;
+      met(d, w, hit);
+    }
+  }
+
+  std::vector<Row> rows_;  // three buffers of kWindow × kWindow rows, [z][y], bit x
+};
+
+/**
+ * Settles a brick's cells with windows: within 8 cells, then, for the cells left of a brick still dense
+ * enough, within 16. Sparser bricks cost less cell by cell, with the nearest-tree-neighbour search.
+ */
+class BrickSettler {
+ public:
+  /** Below this many cells a window costs more than searching each cell. */
+  static constexpr unsigned kMinNearCells = 4, kMinFarCells = 24;
+  static constexpr unsigned kNearReach = 8, kFarReach = 16;
+
+  BrickSettler(const FastOctTree& tree, CellState state) : parts_(tree, state) {}
+
+  /**
+   * BrickWindow::settle up to `limit` cells away (with the far window only beyond 8). Returns the distance
+   * within which every cell of the brick was settled (the cells left are further), or -1 if none was tried.
+   */
+  template <typename Met>
+  std::int64_t settle(const std::uint32_t corner[3], Brick& cells, std::int64_t limit, Met&& met) {
+    if (limit < 0 || cells.count() < kMinNearCells) return -1;
+    std::copy(corner, corner + 3, corner_);
+    near_.settle(parts_, corner, cells, 0, unsigned(std::min<std::int64_t>(limit, kNearReach)), met);
+    if (limit <= kNearReach || cells.count() < kMinFarCells) return kNearReach;
+    far_.settle(parts_, corner, cells, kNearReach + 1, unsigned(std::min<std::int64_t>(limit, kFarReach)),
+                met);
+    return kFarReach;
+  }
+
+  /**
+   * The cell of the tree nearest to cell (x, y, z) of the brick last settled, which settle() found at
+   * distance d: of all at that distance, the one with the smallest x, then y, then z (tree coordinates).
+   */
+  void nearestAt(unsigned x, unsigned y, unsigned z, unsigned d, std::uint32_t out[3]) const {
+    if (d <= kNearReach)
+      find(near_, kNearReach, x, y, z, d, out);
+    else
+      find(far_, kFarReach, x, y, z, d, out);
+  }
+
+ private:
+  template <typename Window>
+  void find(const Window& w, unsigned reach, unsigned x, unsigned y, unsigned z, unsigned d,
+            std::uint32_t out[3]) const {
+    const int c[3] = {int(reach + x), int(reach + y), int(reach + z)}, r = int(d);
+    // The L1 sphere of radius d, in key order; the first cell held is the answer.
+    for (int dx = -r; dx <= r; ++dx) {
+      const int ry = r - std::abs(dx);
+      for (int dy = -ry; dy <= ry; ++dy) {
+        const int rz = ry - std::abs(dy);
+        for (int dz : {-rz, rz}) {
+          if (w.holds(unsigned(c[0] + dx), unsigned(c[1] + dy), unsigned(c[2] + dz))) {
+            out[0] = corner_[0] + x + dx, out[1] = corner_[1] + y + dy, out[2] = corner_[2] + z + dz;
+            return;
+          }
+          if (rz == 0) break;
+        }
+      }
+    }
+    throw std::logic_error("pcl::fot: a settled cell has no neighbour at its distance");
+  }
+
+  PartCache parts_;
+  BrickWindow<kNearReach> near_;
+  BrickWindow<kFarReach> far_;
+  std::uint32_t corner_[3] = {0, 0, 0};
 };
 
 }  // namespace detail

@@ -27,7 +27,7 @@ std::uint64_t cellCount(const FastOctTree& t, CellState v) {
 class DirectedSum {
  public:
   DirectedSum(const FastOctTree& b, CellState v, std::int64_t cap)
-      : v_(v), cap_(cap), parts_(b, v), search_(b, Metric::Manhattan, v), b_cells_(b) {}
+      : v_(v), cap_(cap), windows_(b, v), search_(b, Metric::Manhattan, v), b_cells_(b) {}
 
   std::uint64_t regions(const Region* first, const Region* last) {
     std::uint64_t sum = 0;
@@ -50,9 +50,6 @@ class DirectedSum {
   }
 
  private:
-  /** Windows cost about as much as a few searches: below this many cells a brick is searched cell by cell. */
-  static constexpr unsigned kMinWindowCells = 4, kMinFarWindowCells = 24;
-
   /** A cube of a's cells, all holding v, of at least a brick: zero if b holds v throughout, else by bricks.
    */
   std::uint64_t cube(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
@@ -86,9 +83,15 @@ class DirectedSum {
 
   std::uint64_t brick(const std::uint32_t corner[3], detail::Brick& cells) {
     std::uint64_t sum = 0;
-    if (cells.count() >= kMinWindowCells) sum += near_.settle(parts_, corner, cells, 0, cap_);
-    if (cells.count() >= kMinFarWindowCells) sum += far_.settle(parts_, corner, cells, 9, cap_);
-    constexpr unsigned side = detail::BrickWindow<8>::kSide;
+    const std::int64_t settled =
+        windows_.settle(corner, cells, cap_, [&sum](unsigned d, unsigned, std::uint64_t bits) {
+          sum += std::uint64_t(d) * detail::popcount64(bits);
+        });
+    if (cap_ <= settled) {  // every cell left is at least cap away
+      sum += std::uint64_t(cap_) * cells.count();
+      return sum;
+    }
+    constexpr unsigned side = detail::Brick::kSide;
     for (unsigned w = 0; w < detail::Brick::kWords; ++w)
       for (std::uint64_t left = cells.bits[w]; left; left &= left - 1) {
         const unsigned i = w * 64 + unsigned(__builtin_ctzll(left));
@@ -102,9 +105,7 @@ class DirectedSum {
 
   CellState v_;
   std::int64_t cap_;
-  detail::PartCache parts_;
-  detail::BrickWindow<8> near_;
-  detail::BrickWindow<16> far_;
+  detail::BrickSettler windows_;
   NearestCellSearch search_;
   ConstAccessor b_cells_;
   detail::Brick brick_;

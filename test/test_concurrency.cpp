@@ -112,6 +112,21 @@ TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
     ASSERT_EQ(r.cells, expected.cells);
   });
 
+  std::vector<Key> cells;  // the batch cell query, several at once, each itself threaded
+  b.forEachCell(CellState::Occupied, [&](const Key& k) { cells.push_back(k); });
+  std::vector<CellMatch> serial_cells;
+  NearestCellSearch(a).nearest(cells, serial_cells);
+  together([&](unsigned) {
+    NearestCellSearch search(a);
+    search.setNumberOfThreads(kThreads);
+    std::vector<CellMatch> got;
+    search.nearest(cells, got);
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      ASSERT_EQ(got[i].key, serial_cells[i].key);
+      ASSERT_EQ(got[i].distance, serial_cells[i].distance);
+    }
+  });
+
   const auto cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
   const auto queries = pcl_fot_test::loadScan("kinect_capture0002.pcd");
   pcl::Indices finite;

@@ -111,6 +111,101 @@ TEST(NearestCellSearch, RealScansInSpatialOrder) {
   checkQueries(target, CellState::Occupied, queries);
 }
 
+/** The batch query against one query at a time, for every bound that changes which window answers. */
+void checkBatch(const FastOctTree& tree, CellState target, const std::vector<Key>& queries) {
+  for (Metric m : {Metric::Manhattan, Metric::Euclidean})
+    for (std::int64_t bound :
+         {NearestCellSearch::kUnbounded, std::int64_t(0), std::int64_t(5), std::int64_t(8), std::int64_t(9),
+          std::int64_t(13), std::int64_t(16), std::int64_t(17), std::int64_t(40), std::int64_t(-1)}) {
+      NearestCellSearch single(tree, m, target), batch(tree, m, target), threaded(tree, m, target);
+      threaded.setNumberOfThreads(3);
+      std::vector<CellMatch> got, got_threaded;
+      std::size_t expected_found = 0;
+      const std::size_t found = batch.nearest(queries, got, bound);
+      ASSERT_EQ(got.size(), queries.size());
+      EXPECT_EQ(threaded.nearest(queries, got_threaded, bound), found);
+      for (std::size_t i = 0; i < queries.size(); ++i) {
+        ASSERT_EQ(got_threaded[i].key, got[i].key) << "threads give the serial answers";
+        ASSERT_EQ(got_threaded[i].distance, got[i].distance) << "threads give the serial answers";
+      }
+      for (std::size_t i = 0; i < queries.size(); ++i) {
+        CellMatch one;
+        if (single.nearest(queries[i], one, bound)) {
+          ++expected_found;
+          ASSERT_EQ(got[i].key, one.key) << toString(queries[i]) << " within " << bound;
+          ASSERT_EQ(got[i].distance, one.distance) << toString(queries[i]) << " within " << bound;
+        } else {
+          ASSERT_EQ(got[i].distance, -1) << toString(queries[i]) << " within " << bound;
+        }
+      }
+      EXPECT_EQ(found, expected_found);
+    }
+}
+
+/** Every cell of the 16³ bricks around `centre`, so that bricks are dense enough for both windows. */
+void addBricks(std::vector<Key>& queries, const Key& centre, int bricks) {
+  for (int z = -8 * bricks; z < 8 * bricks; ++z)
+    for (int y = -8 * bricks; y < 8 * bricks; ++y)
+      for (int x = -8 * bricks; x < 8 * bricks; ++x)
+        queries.push_back({centre.x + x, centre.y + y, centre.z + z});
+}
+
+TEST(NearestCellSearch, BatchAnswersAsSingleQueries) {
+  FastOctTree tree(0.1);
+  std::mt19937 rng(7);
+  // Sparse surfaces with gaps wider than both windows, plus collapsed cubes.
+  for (int i = 0; i < 400; ++i)
+    tree.setCell(
+        {std::int32_t(rng() % 120) - 60, std::int32_t(rng() % 120) - 60, 3 * std::int32_t(rng() % 3)},
+        (rng() % 5) ? CellState::Occupied : CellState::Free);
+  for (int z = 0; z < 4; ++z)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) tree.setCell({40 + x, -40 + y, 30 + z}, CellState::Occupied);
+  std::vector<Key> queries;
+  addBricks(queries, {0, 0, 8}, 1);      // near the surfaces
+  addBricks(queries, {-16, 16, 32}, 1);  // 9 to 40 cells away: the far window and the walk
+  addBricks(queries, {48, -32, 16}, 1);
+  for (int i = 0; i < 500; ++i)  // scattered, a few per brick: searched one by one
+    queries.push_back(
+        {std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 300) - 150, std::int32_t(rng() % 100) - 50});
+  queries.push_back(queries[5]);  // a repeated query
+  queries.push_back({kMaxKey, kMinKey, 0});
+  std::shuffle(queries.begin(), queries.end(), rng);  // any order, not only the tree's
+  checkBatch(tree, CellState::Occupied, queries);
+  checkBatch(tree, CellState::Free, queries);
+
+  NearestCellSearch search(tree);
+  std::vector<CellMatch> got{CellMatch{{1, 2, 3}, 4}};
+  EXPECT_EQ(search.nearest(std::vector<Key>{}, got), 0u);
+  EXPECT_TRUE(got.empty());
+  got = {CellMatch{{1, 2, 3}, 4}};
+  EXPECT_THROW(search.nearest(std::vector<Key>{{0, 0, 0}, {kMaxKey + 1, 0, 0}}, got), std::out_of_range);
+  ASSERT_EQ(got.size(), 1u) << "a refused batch leaves the answers alone";
+  EXPECT_EQ(got[0].distance, 4);
+  FastOctTree empty(0.1);
+  NearestCellSearch none(empty);
+  EXPECT_EQ(none.nearest(queries, got), 0u) << "an empty map answers no query";
+}
+
+TEST(NearestCellSearch, BatchOnRealScans) {
+  const VoxelGrid grid(0.05);
+  FastOctTree target(grid), query_map(grid);
+  insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
+  insertPointCloud(query_map, *pcl_fot_test::loadScan("room_scan2.pcd"));
+  std::vector<Key> queries, cells;
+  query_map.forEachCell(CellState::Occupied, [&](const Key& k) { queries.push_back(k); });
+  target.forEachCell(CellState::Occupied, [&](const Key& k) { cells.push_back(k); });
+  NearestCellSearch search(target);
+  std::vector<CellMatch> got;
+  ASSERT_EQ(search.nearest(queries, got), queries.size());
+  for (std::size_t i = 0; i < queries.size(); i += 97) {  // brute force on a sample
+    const CellMatch best = bruteForce(cells, Metric::Manhattan, queries[i])[0];
+    ASSERT_EQ(got[i].key, best.key) << toString(queries[i]);
+    ASSERT_EQ(got[i].distance, best.distance);
+  }
+  checkBatch(target, CellState::Occupied, std::vector<Key>(queries.begin(), queries.begin() + 6000));
+}
+
 TEST(NearestCellSearch, EdgeCases) {
   FastOctTree empty(0.1);
   NearestCellSearch search(empty);

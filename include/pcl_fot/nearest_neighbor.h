@@ -258,6 +258,15 @@ class NearestCellSearch {
 
   /** The nearest target cell within max_distance (inclusive); false if there is none. */
   bool nearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
+  /**
+   * nearest() for many queries: matches[i] answers queries[i], with distance -1 where no target cell lies
+   * within max_distance; returns how many were found. The answers are nearest()'s, in any order of the
+   * queries. In the Manhattan metric the queries are taken a 16³ brick at a time, in Morton order, and the
+   * target cells around a brick of several queries are dilated bit by bit, which settles every query
+   * within 16 cells at once; only the rest are searched one by one. Runs over getNumberOfThreads() threads.
+   */
+  std::size_t nearest(const std::vector<Key>& queries, std::vector<CellMatch>& matches,
+                      std::int64_t max_distance = kUnbounded);
   /** The k nearest target cells within max_distance, nearest first; returns how many. */
   std::size_t nearestK(const Key& query, std::size_t k, std::vector<CellMatch>& matches,
                        std::int64_t max_distance = kUnbounded);
@@ -266,6 +275,14 @@ class NearestCellSearch {
 
   const FastOctTree& tree() const { return tree_; }
   Metric metric() const { return metric_; }
+  CellState target() const { return target_; }
+
+  /**
+   * Threads for the batch query: 1 (the default) runs it in the caller's thread, 0 takes every hardware
+   * thread. The answers do not depend on the count.
+   */
+  void setNumberOfThreads(unsigned threads) { threads_ = threads; }
+  unsigned getNumberOfThreads() const { return threads_; }
 
  private:
   /** A cell found so far: ordered by distance, then by key (tree coordinates sort as keys do). */
@@ -294,6 +311,7 @@ class NearestCellSearch {
   std::vector<Candidate> heap_;
   Key previous_;  // the last nearest cell: the next query's first candidate
   bool has_previous_ = false;
+  unsigned threads_ = 1;
 };
 
 }  // namespace fot

@@ -88,8 +88,9 @@ std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats) {
       "scan",        "res",     "points", "FOT",     "FOT no LB",         "grid (GR)",
       "pcl::octree", "OctoMap", "FT/GR",  "LB gain", "pcl::octree / FOT", "OctoMap / FOT"};
   Table repeated(header), fresh(header);
-  Table memory({"scan", "occupied cells", "FOT bytes", "grid bytes", "FOT / grid", "pcl::octree bytes",
-                "OctoMap bytes", "OctoMap / FOT", "pcl::octree / FOT"});
+  Table memory({"scan", "occupied cells", "FOT bytes", "FOT node bytes", "grid bytes", "FOT / grid",
+                "pcl::octree bytes", "OctoMap bytes", "OctoMap / FOT", "OctoMap / FOT nodes",
+                "pcl::octree / FOT"});
   std::vector<double> ft_gr_repeated, ft_gr_fresh;
   for (const BenchScan& scan : scans) {
     std::fprintf(stderr, "  cell access: %s\n", scan.name.c_str());
@@ -104,15 +105,17 @@ std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats) {
       addSpeedRow(fresh, scan, insertRounds(f, scan, finite, repeats, true), ft_gr_fresh);
     }
     const double fot_bytes = double(c.fot.getMemoryBytes()), grid_bytes = double(c.grid.getMemoryBytes());
+    const double fot_nodes =
+        double(c.fot.getNodeCount() * sizeof(pcl::fot::NodeWord) + sizeof(pcl::fot::FastOctTree));
     const double pcl_bytes = double(c.pcl_octree.getLeafCount()) * sizeof(PclOccupancy::LeafNode) +
                              double(c.pcl_octree.getBranchCount()) * sizeof(PclOccupancy::BranchNode) +
                              sizeof(PclOccupancy);
     const double om_bytes = double(c.octomap_tree.memoryUsage());
     memory.add({scan.name, format("%llu", (unsigned long long)c.fot.getOccupiedCount()),
-                format("%.0f", fot_bytes), format("%.0f", grid_bytes),
+                format("%.0f", fot_bytes), format("%.0f", fot_nodes), format("%.0f", grid_bytes),
                 format("**%.3f%%**", 100.0 * fot_bytes / grid_bytes), format("%.0f", pcl_bytes),
                 format("%.0f", om_bytes), format("**%.1f×**", om_bytes / fot_bytes),
-                format("%.1f×", pcl_bytes / fot_bytes)});
+                format("%.1f×", om_bytes / fot_nodes), format("%.1f×", pcl_bytes / fot_bytes)});
   }
 
   std::string out;
@@ -139,9 +142,10 @@ std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats) {
   out += format("\nMedian FT/GR: **%.2f**.\n\n", median(ft_gr_fresh));
   out +=
       "Memory after the repeated insertions. FOT bytes are everything the tree allocated "
-      "(`getMemoryBytes()`: the object plus the pool's capacity). The grid is its bit array. OctoMap is its "
-      "own `memoryUsage()`. pcl::octree has no such call; its figure is nodes × node size, the accounting "
-      "OctoMap uses.\n\n";
+      "(`getMemoryBytes()`: the object plus the pool's capacity, which grows by doubling); FOT node bytes "
+      "count the node words in use and the object, the accounting OctoMap's `memoryUsage()` applies to its "
+      "own nodes. The grid is its bit array. pcl::octree has no such call; its figure is nodes × node size "
+      "as well. The ratios in bold use everything FOT allocated.\n\n";
   out += memory.markdown();
   return out;
 }
