@@ -16,49 +16,84 @@ namespace {
  * The tree's side. With LineBurstAccess, a ray's cells come in runs through the same 2×2×2 leaf, so they
  * are marked free a leaf at a time, and cubes the tree reports free already are passed without touching
  * it: the last visited node answers for the next cells. Phase 1 only ever adds free cells, so a cube found
- * free stays free, even for the following rays. Without it, every cell is its own access from the root.
+ * free stays free, even for the following rays; so do the cells of the leaves written lately, which a
+ * small table remembers: neighbouring rays cross the same leaves again and again. Without LineBurstAccess,
+ * every cell is its own access from the root.
  */
 class TreeWriter {
  public:
-  TreeWriter(FastOctTree& t, bool line_burst) : accessor_(t, line_burst), line_burst_(line_burst) {}
+  /** `rays`, the scan's size, sizes the table of written leaves: one entry per ray, 2^10 to 2^16. */
+  TreeWriter(FastOctTree& t, bool line_burst, std::size_t rays)
+      : accessor_(t, line_burst), line_burst_(line_burst) {
+    if (!line_burst) return;
+    while (written_bits_ < 16 && (std::size_t(1) << written_bits_) < rays) ++written_bits_;
+    written_.resize(std::size_t(1) << written_bits_);
+  }
 
   void freeRun(const Key* cells, int n) {
     if (!line_burst_) {
       for (int i = 0; i < n; ++i) accessor_.setValidCell(cells[i], CellState::Free);
       return;
     }
+    Pending p = pending_;  // a local copy stays in registers across the loop
     for (int i = 0; i < n; ++i) {
       const std::uint32_t u[3] = {tree_coord::fromKey(cells[i].x), tree_coord::fromKey(cells[i].y),
                                   tree_coord::fromKey(cells[i].z)};
-      if (skip_ > 0 && (((u[0] ^ cube_[0]) | (u[1] ^ cube_[1]) | (u[2] ^ cube_[2])) >> skip_) == 0) continue;
+      if (p.skip > 0 && (((u[0] ^ p.cube[0]) | (u[1] ^ p.cube[1]) | (u[2] ^ p.cube[2])) >> p.skip) == 0)
+        continue;
       const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
-      if (mask_ != 0 && (((u[0] ^ leaf_[0]) | (u[1] ^ leaf_[1]) | (u[2] ^ leaf_[2])) >> 1) == 0) {
-        mask_ |= bit;
+      if (p.mask != 0 && (((u[0] ^ p.leaf[0]) | (u[1] ^ p.leaf[1]) | (u[2] ^ p.leaf[2])) >> 1) == 0) {
+        p.mask |= bit;
         continue;
       }
-      endRay();
-      key_ = cells[i];
-      leaf_[0] = u[0], leaf_[1] = u[1], leaf_[2] = u[2];
-      mask_ = bit;
+      write(p);
+      p.key = cells[i];
+      p.leaf[0] = u[0], p.leaf[1] = u[1], p.leaf[2] = u[2];
+      p.mask = bit;
     }
+    pending_ = p;
   }
 
-  void endRay() {
-    if (mask_ == 0) return;
-    skip_ = accessor_.setValidLeafCells(key_, mask_, CellState::Free);
-    cube_[0] = leaf_[0], cube_[1] = leaf_[1], cube_[2] = leaf_[2];
-    mask_ = 0;
-  }
+  void endRay() { write(pending_); }
 
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
 
  private:
+  struct Pending {
+    Key key;
+    std::uint32_t mask = 0, leaf[3] = {0, 0, 0};  // the pending cells of one leaf
+    unsigned skip = 0;                            // a cube known free: 2^skip cells around cube
+    std::uint32_t cube[3] = {0, 0, 0};
+  };
+
+  /** A leaf this writer made cells free in, and which: they stay free until the scan's endpoints. */
+  struct Written {
+    std::uint32_t leaf[3] = {0, 0, 0};  // tree coordinates halved
+    std::uint32_t mask = 0;
+  };
+
+  void write(Pending& p) {
+    if (p.mask == 0) return;
+    const std::uint32_t leaf[3] = {p.leaf[0] >> 1, p.leaf[1] >> 1, p.leaf[2] >> 1};
+    Written& w = written_[(leaf[0] * 0x9E3779B1u ^ leaf[1] * 0x85EBCA77u ^ leaf[2] * 0xC2B2AE3Du) >>
+                          (32 - written_bits_)];
+    const bool same = w.leaf[0] == leaf[0] && w.leaf[1] == leaf[1] && w.leaf[2] == leaf[2];
+    if (same && (p.mask & ~w.mask) == 0) {  // neighbouring rays cross the same leaves again and again
+      p.mask = 0;
+      return;
+    }
+    p.skip = accessor_.setValidLeafCells(p.key, p.mask, CellState::Free);
+    p.cube[0] = p.leaf[0], p.cube[1] = p.leaf[1], p.cube[2] = p.leaf[2];
+    w.mask = (same ? w.mask : 0u) | p.mask;
+    w.leaf[0] = leaf[0], w.leaf[1] = leaf[1], w.leaf[2] = leaf[2];
+    p.mask = 0;
+  }
+
   Accessor accessor_;
   bool line_burst_;
-  Key key_;
-  std::uint32_t mask_ = 0, leaf_[3] = {0, 0, 0};  // the pending cells of one leaf
-  unsigned skip_ = 0;                             // a cube known free: 2^skip_ cells around cube_
-  std::uint32_t cube_[3] = {0, 0, 0};
+  Pending pending_;
+  unsigned written_bits_ = 10;
+  std::vector<Written> written_;
 };
 
 class GridWriter {
@@ -144,7 +179,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
 
 ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, std::size_t count,
                      std::size_t stride_bytes, const ScanOptions& options) {
-  TreeWriter writer(map, options.line_burst);
+  TreeWriter writer(map, options.line_burst, count);
   return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
 }
 

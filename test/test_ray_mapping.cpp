@@ -164,6 +164,30 @@ TEST(ScanInsertion, TreeAndGridAgreeCellForCell) {
     grid.forEachCell(s, [&](const Key& k) { ASSERT_EQ(tree.getCell(k), s) << toString(k); });
 }
 
+TEST(ScanInsertion, LineBurstOnAndOffAgreeOnTheLeavesTheWriterRemembers) {
+  // Long rays along each axis, and cones of shorter ones around them, so that the writer's small table of
+  // written leaves (one entry per ray) keeps meeting leaves that differ in one coordinate only.
+  Cloud cloud;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> spread(-0.08f, 0.08f);
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < 200; ++i) {
+      float p[3] = {spread(rng), spread(rng), spread(rng)};
+      p[axis] = (i % 2 ? 1.0f : -1.0f) * (3.0f + spread(rng));
+      if (i < 2) p[(axis + 1) % 3] = p[(axis + 2) % 3] = 0.005f, p[axis] *= 8.0f;
+      cloud.push_back(pcl::PointXYZ(p[0], p[1], p[2]));
+    }
+  FastOctTree tree(0.01), tree_plain(0.01);
+  ScanOptions plain;
+  plain.line_burst = false;
+  for (int scan = 0; scan < 2; ++scan) {  // the second scan finds its leaves written already
+    const ScanStats a = insertScan(tree, cloud), b = insertScan(tree_plain, cloud, plain);
+    EXPECT_EQ(a.ray_cells, b.ray_cells);
+    ASSERT_TRUE(tree == tree_plain) << "scan " << scan;
+  }
+  EXPECT_GT(tree.getFreeCount(), 50000u);
+}
+
 TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
   auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   cloud->sensor_origin_ = Eigen::Vector4f(1.3f, -0.4f, 0.2f, 0.0f);
