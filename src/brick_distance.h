@@ -205,11 +205,12 @@ class BrickSettler {
   std::int64_t settle(const std::uint32_t corner[3], Brick& cells, std::int64_t limit, Met&& met) {
     if (limit < 0 || cells.count() < kMinNearCells) return -1;
     std::copy(corner, corner + 3, corner_);
-    near_.settle(parts_, corner, cells, 0, unsigned(std::min<std::int64_t>(limit, kNearReach)), met);
-    if (limit <= kNearReach || cells.count() < kMinFarCells) return kNearReach;
-    far_.settle(parts_, corner, cells, kNearReach + 1, unsigned(std::min<std::int64_t>(limit, kFarReach)),
-                met);
-    return kFarReach;
+    const unsigned near = unsigned(std::min<std::int64_t>(limit, kNearReach));
+    near_.settle(parts_, corner, cells, 0, near, met);
+    if (limit <= kNearReach || cells.count() < kMinFarCells) return near;
+    const unsigned far = unsigned(std::min<std::int64_t>(limit, kFarReach));
+    far_.settle(parts_, corner, cells, kNearReach + 1, far, met);
+    return far;
   }
 
   /**
