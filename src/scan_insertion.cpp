@@ -13,16 +13,16 @@ namespace fot {
 namespace {
 
 /**
- * The tree's side. With LineBurstAccess, a ray's cells come in runs through the same 2×2×2 leaf, so they
- * are marked free a leaf at a time, and cubes the tree reports free already are passed without touching
- * it: the last visited node answers for the next cells. Phase 1 only ever adds free cells, so a cube found
- * free stays free, even for the following rays; so do the cells of the leaves written lately, which a
- * small table remembers: neighbouring rays cross the same leaves again and again. Without LineBurstAccess,
- * every cell is its own access from the root.
+ * The tree's side. With LineBurstAccess, a ray's cells come grouped by leaf, so they are marked free a
+ * leaf word at a time, and cubes the tree reports free already are passed without touching it: the last
+ * visited node answers for the next cells. Phase 1 only ever adds free cells, so a cube found free stays
+ * free, even for the following rays; so do the cells written lately, which a small table remembers:
+ * neighbouring rays cross the same leaves again and again. Without LineBurstAccess, every cell is its own
+ * access from the root.
  */
 class TreeWriter {
  public:
-  /** `rays`, the scan's size, sizes the table of written leaves: one entry per ray, 2^10 to 2^16. */
+  /** `rays`, the scan's size, sizes the table of written blocks: one entry per ray, 2^10 to 2^16. */
   TreeWriter(FastOctTree& t, bool line_burst, std::size_t rays)
       : accessor_(t, line_burst), line_burst_(line_burst) {
     if (!line_burst) return;
@@ -30,68 +30,42 @@ class TreeWriter {
     written_.resize(std::size_t(1) << written_bits_);
   }
 
-  void freeRun(const Key* cells, int n) {
-    if (!line_burst_) {
-      for (int i = 0; i < n; ++i) accessor_.setValidCell(cells[i], CellState::Free);
-      return;
-    }
-    Pending p = pending_;  // a local copy stays in registers across the loop
-    for (int i = 0; i < n; ++i) {
-      const std::uint32_t u[3] = {tree_coord::fromKey(cells[i].x), tree_coord::fromKey(cells[i].y),
-                                  tree_coord::fromKey(cells[i].z)};
-      if (p.skip > 0 && (((u[0] ^ p.cube[0]) | (u[1] ^ p.cube[1]) | (u[2] ^ p.cube[2])) >> p.skip) == 0)
-        continue;
-      const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
-      if (p.mask != 0 && (((u[0] ^ p.leaf[0]) | (u[1] ^ p.leaf[1]) | (u[2] ^ p.leaf[2])) >> 1) == 0) {
-        p.mask |= bit;
-        continue;
-      }
-      write(p);
-      p.key = cells[i];
-      p.leaf[0] = u[0], p.leaf[1] = u[1], p.leaf[2] = u[2];
-      p.mask = bit;
-    }
-    pending_ = p;
+  std::size_t freeRay(const VoxelGrid& grid, const float from[3], const float to[3]) {
+    if (!line_burst_)
+      return traceSegment(grid, from, to, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
+    return traceSegmentLeaves(grid, from, to, [&](const Key& k, std::uint32_t mask) { freeLeaf(k, mask); });
   }
-
-  void endRay() { write(pending_); }
 
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
 
  private:
-  struct Pending {
-    Key key;
-    std::uint32_t mask = 0, leaf[3] = {0, 0, 0};  // the pending cells of one leaf
-    unsigned skip = 0;                            // a cube known free: 2^skip cells around cube
-    std::uint32_t cube[3] = {0, 0, 0};
-  };
-
-  /** A leaf this writer made cells free in, and which: they stay free until the scan's endpoints. */
+  /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
   struct Written {
-    std::uint32_t leaf[3] = {0, 0, 0};  // tree coordinates halved
-    std::uint32_t mask = 0;
+    std::uint32_t block[3] = {0, 0, 0};  // tree coordinates / 4
+    std::uint64_t cells = 0;             // bit 8 * leaf + octant
   };
 
-  void write(Pending& p) {
-    if (p.mask == 0) return;
-    const std::uint32_t leaf[3] = {p.leaf[0] >> 1, p.leaf[1] >> 1, p.leaf[2] >> 1};
-    Written& w = written_[(leaf[0] * 0x9E3779B1u ^ leaf[1] * 0x85EBCA77u ^ leaf[2] * 0xC2B2AE3Du) >>
+  void freeLeaf(const Key& k, std::uint32_t mask) {
+    const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z)};
+    if (skip_ != 0 && ((u[0] ^ cube_[0]) | (u[1] ^ cube_[1]) | (u[2] ^ cube_[2])) >> skip_ == 0) return;
+    const std::uint32_t block[3] = {u[0] >> 2, u[1] >> 2, u[2] >> 2};
+    Written& w = written_[(block[0] * 0x9E3779B1u ^ block[1] * 0x85EBCA77u ^ block[2] * 0xC2B2AE3Du) >>
                           (32 - written_bits_)];
-    const bool same = w.leaf[0] == leaf[0] && w.leaf[1] == leaf[1] && w.leaf[2] == leaf[2];
-    if (same && (p.mask & ~w.mask) == 0) {  // neighbouring rays cross the same leaves again and again
-      p.mask = 0;
-      return;
-    }
-    p.skip = accessor_.setValidLeafCells(p.key, p.mask, CellState::Free);
-    p.cube[0] = p.leaf[0], p.cube[1] = p.leaf[1], p.cube[2] = p.leaf[2];
-    w.mask = (same ? w.mask : 0u) | p.mask;
-    w.leaf[0] = leaf[0], w.leaf[1] = leaf[1], w.leaf[2] = leaf[2];
-    p.mask = 0;
+    const bool same = w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2];
+    const std::uint64_t cells = std::uint64_t(mask) << (8 * tree_coord::octant(u[0], u[1], u[2], 2));
+    if (same && (cells & ~w.cells) == 0) return;  // neighbouring rays cross the same leaves again and again
+    const unsigned skip = accessor_.setValidLeafCells(k, mask, CellState::Free);
+    w.cells = (same ? w.cells : 0u) | cells;
+    w.block[0] = block[0], w.block[1] = block[1], w.block[2] = block[2];
+    if (skip == 0) return;
+    skip_ = skip;
+    cube_[0] = u[0], cube_[1] = u[1], cube_[2] = u[2];
   }
 
   Accessor accessor_;
   bool line_burst_;
-  Pending pending_;
+  unsigned skip_ = 0;  // a cube known free: the 2^skip_ cells around cube_ per axis (0: none)
+  std::uint32_t cube_[3] = {0, 0, 0};
   unsigned written_bits_ = 10;
   std::vector<Written> written_;
 };
@@ -99,11 +73,11 @@ class TreeWriter {
 class GridWriter {
  public:
   explicit GridWriter(FastOccMesh& g) : grid_(g) {}
-  void freeRun(const Key* cells, int n) {
-    for (int i = 0; i < n; ++i)
-      if (grid_.contains(cells[i])) grid_.setCell(cells[i], CellState::Free);
+  std::size_t freeRay(const VoxelGrid& grid, const float from[3], const float to[3]) {
+    return traceSegment(grid, from, to, [&](const Key& k) {
+      if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
+    });
   }
-  void endRay() {}
   void occupied(const Key& k) {
     if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
   }
@@ -129,7 +103,6 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
   ScanStats stats;
   std::vector<Key> endpoints;
   endpoints.reserve(count);
-  auto mark_free = [&](const Key* cells, int n) { writer.freeRun(cells, n); };
   const char* bytes = reinterpret_cast<const char*>(xyz);
   for (std::size_t i = 0; i < count; ++i) {
     const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
@@ -153,8 +126,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
         ++stats.out_of_range;
         continue;
       }
-      stats.ray_cells += traceSegmentRuns(grid, sensor, end, mark_free);
-      writer.endRay();
+      stats.ray_cells += writer.freeRay(grid, sensor, end);
       ++stats.truncated;
       ++stats.rays;
       continue;
@@ -164,8 +136,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
       ++stats.out_of_range;
       continue;
     }
-    stats.ray_cells += traceSegmentRuns(grid, sensor, p, mark_free);
-    writer.endRay();
+    stats.ray_cells += writer.freeRay(grid, sensor, p);
     endpoints.push_back(key);
     ++stats.rays;
   }

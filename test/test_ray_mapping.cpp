@@ -164,9 +164,9 @@ TEST(ScanInsertion, TreeAndGridAgreeCellForCell) {
     grid.forEachCell(s, [&](const Key& k) { ASSERT_EQ(tree.getCell(k), s) << toString(k); });
 }
 
-TEST(ScanInsertion, LineBurstOnAndOffAgreeOnTheLeavesTheWriterRemembers) {
+TEST(ScanInsertion, LineBurstOnAndOffAgreeOnTheBlocksTheWriterRemembers) {
   // Long rays along each axis, and cones of shorter ones around them, so that the writer's small table of
-  // written leaves (one entry per ray) keeps meeting leaves that differ in one coordinate only.
+  // written blocks (one entry per ray) keeps meeting blocks that differ in one coordinate only.
   Cloud cloud;
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> spread(-0.08f, 0.08f);

@@ -109,14 +109,13 @@ inline RaySetup setupRay(const VoxelGrid& grid, const float from[3], const float
 }
 
 /**
- * Walks the segment from `origin` to `end` (map frame) and hands its cells to `visit_run(const Key* cells,
- * int n)` in order, in runs of up to 64: the origin's cell first, the end's cell excluded, nothing if both
- * are one cell. These are exactly the cells of OctoMap's computeRayKeys. Returns how many cells the segment
- * passes: 0 when both ends share a cell, or an end is not finite or beyond the key range.
+ * Walks the segment from `origin` to `end` (map frame) and hands its cells to `visit(const Key&)` in order:
+ * the origin's cell first, the end's cell excluded, nothing if both are one cell. These are exactly the
+ * cells of OctoMap's computeRayKeys. Returns how many cells the segment passes: 0 when both ends share a
+ * cell, or an end is not finite or beyond the key range.
  */
-template <typename RunVisitor>
-std::size_t traceSegmentRuns(const VoxelGrid& grid, const float origin[3], const float end[3],
-                             RunVisitor&& visit_run) {
+template <typename Visitor>
+std::size_t traceSegment(const VoxelGrid& grid, const float origin[3], const float end[3], Visitor&& visit) {
   Key from, to;
   if (!grid.pointToKey(origin[0], origin[1], origin[2], from) ||
       !grid.pointToKey(end[0], end[1], end[2], to) || from == to)
@@ -127,33 +126,43 @@ std::size_t traceSegmentRuns(const VoxelGrid& grid, const float origin[3], const
   // rounding has made it miss `to`, which the length test catches. The cap guards against a hang.
   const std::int64_t span = std::llabs(std::int64_t(to.x) - from.x) +
                             std::llabs(std::int64_t(to.y) - from.y) + std::llabs(std::int64_t(to.z) - from.z);
-  // Filling a small buffer and then draining it keeps both loops tight.
-  constexpr int kRun = 64;
-  Key cells[kRun];
-  int n = 0;
-  cells[n++] = from;
+  const double length = ray.length;
+  visit(from);
   std::size_t total = 1;
   for (std::int64_t steps = 1;; ++steps) {
     walker.step();
     if (steps >= span && (walker.at(to) || steps > span + 3)) break;
-    if (walker.exitDistance() > double(ray.length)) break;  // rounding made the walk miss the end cell
-    cells[n++] = walker.key();
+    if (walker.exitDistance() > length) break;  // rounding made the walk miss the end cell
+    visit(walker.key());
     ++total;
-    if (n == kRun) {
-      visit_run(static_cast<const Key*>(cells), n);
-      n = 0;
-    }
   }
-  if (n > 0) visit_run(static_cast<const Key*>(cells), n);
   return total;
 }
 
-/** traceSegmentRuns with one call per cell: visit(const Key&). */
-template <typename Visitor>
-std::size_t traceSegment(const VoxelGrid& grid, const float origin[3], const float end[3], Visitor&& visit) {
-  return traceSegmentRuns(grid, origin, end, [&](const Key* cells, int n) {
-    for (int i = 0; i < n; ++i) visit(cells[i]);
+/**
+ * traceSegment with the cells grouped by the tree's 2×2×2 leaves: `visit_leaf(const Key& cell, uint32_t
+ * mask)` gets, for each stretch of the ray inside one leaf, its first cell and the octant bits of the cells
+ * it passes there. The grouping lives in the walk's own loop, where its state stays in registers.
+ */
+template <typename LeafVisitor>
+std::size_t traceSegmentLeaves(const VoxelGrid& grid, const float origin[3], const float end[3],
+                               LeafVisitor&& visit_leaf) {
+  Key first;
+  std::uint32_t leaf[3] = {0, 0, 0}, mask = 0;
+  const std::size_t cells = traceSegment(grid, origin, end, [&](const Key& k) {
+    const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z)};
+    const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
+    if (mask != 0 && (((u[0] ^ leaf[0]) | (u[1] ^ leaf[1]) | (u[2] ^ leaf[2])) >> 1) == 0) {
+      mask |= bit;
+      return;
+    }
+    if (mask != 0) visit_leaf(static_cast<const Key&>(first), mask);
+    first = k;
+    leaf[0] = u[0], leaf[1] = u[1], leaf[2] = u[2];
+    mask = bit;
   });
+  if (mask != 0) visit_leaf(static_cast<const Key&>(first), mask);
+  return cells;
 }
 
 }  // namespace fot
