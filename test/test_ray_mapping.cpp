@@ -132,6 +132,43 @@ TEST(RayCaster, SegmentEndsExcludeTheEndCell) {
   EXPECT_EQ(traceSegment(grid, o, nan, [](const Key&) { ADD_FAILURE(); }), 0u);
 }
 
+TEST(RayCaster, LeafGroupsAreTheWalksCellsSplitAtEveryLeafChange) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> coord(-3.0f, 3.0f);
+  for (double res : {0.01, 0.05, 0.3}) {
+    const VoxelGrid grid(res);
+    for (int r = 0; r < 300; ++r) {
+      const float o[3] = {coord(rng), coord(rng), coord(rng)}, e[3] = {coord(rng), coord(rng), coord(rng)};
+      const std::vector<Key> cells = ourRay(grid, o, e);
+      // The expected groups: maximal stretches of consecutive cells in one leaf of tree coordinates.
+      std::vector<std::pair<Key, std::uint32_t>> expected;
+      for (const Key& k : cells) {
+        const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y),
+                                    tree_coord::fromKey(k.z)};
+        const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
+        if (!expected.empty()) {
+          const Key& f = expected.back().first;
+          if (tree_coord::fromKey(f.x) >> 1 == u[0] >> 1 && tree_coord::fromKey(f.y) >> 1 == u[1] >> 1 &&
+              tree_coord::fromKey(f.z) >> 1 == u[2] >> 1) {
+            expected.back().second |= bit;
+            continue;
+          }
+        }
+        expected.emplace_back(k, bit);
+      }
+      std::vector<std::pair<Key, std::uint32_t>> groups;
+      const std::size_t n = traceSegmentLeaves(
+          grid, o, e, [&](const Key& k, std::uint32_t mask) { groups.emplace_back(k, mask); });
+      EXPECT_EQ(n, cells.size());
+      ASSERT_EQ(groups.size(), expected.size()) << "ray " << r << " at " << res << " m";
+      for (std::size_t i = 0; i < groups.size(); ++i) {
+        EXPECT_EQ(groups[i].first, expected[i].first);
+        EXPECT_EQ(groups[i].second, expected[i].second);
+      }
+    }
+  }
+}
+
 TEST(ScanInsertion, SameFreeAndOccupiedCellsAsOctoMapOnRoomScan1) {
   expectSameMapAsOctoMap(*scanInMapFrame("room_scan1.pcd"), 0.05, -1.0);
 }
