@@ -49,19 +49,29 @@ struct Result {
   double build_ms, query_ms, sum;
 };
 
-Result measure(Method& m, const std::vector<pcl::PointXYZ>& queries, int repeats) {
-  std::vector<double> b, q;
-  double sum = 0;
+/** Medians over `repeats` rounds; each round times every method in turn, so a change in the machine's load
+ * falls on all of them alike. */
+std::vector<Result> measure(std::vector<Method>& methods, const std::vector<pcl::PointXYZ>& queries,
+                            int repeats, const std::string& what) {
+  std::vector<std::vector<double>> b(methods.size()), q(methods.size());
+  std::vector<double> sums(methods.size(), 0.0);
   for (int r = 0; r < repeats; ++r) {
-    scrubCaches();
-    b.push_back(timeOnce(m.build) * 1e3);
-    sum = 0;
-    q.push_back(timeOnce([&] {
-                  for (const auto& p : queries) m.query(p, sum);
-                }) *
-                1e3);
+    std::fprintf(stderr, "  search: %s, round %d of %d\n", what.c_str(), r + 1, repeats);
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      Method& m = methods[i];
+      scrubCaches();
+      b[i].push_back(timeOnce(m.build) * 1e3);
+      double& sum = sums[i];
+      sum = 0;
+      q[i].push_back(timeOnce([&] {
+                       for (const auto& p : queries) m.query(p, sum);
+                     }) *
+                     1e3);
+    }
   }
-  return {median(b), median(q), sum};
+  std::vector<Result> results;
+  for (std::size_t i = 0; i < methods.size(); ++i) results.push_back({median(b[i]), median(q[i]), sums[i]});
+  return results;
 }
 
 std::string pointLevel(const BenchScan& target, const BenchScan& source, double res, int repeats,
@@ -146,12 +156,8 @@ std::string pointLevel(const BenchScan& target, const BenchScan& source, double 
          s += dist[0];
        }},
   };
-  std::vector<Result> results;
-  for (Method& m : methods) {
-    std::fprintf(stderr, "  search: %s into %s: %s\n", source.name.c_str(), target.name.c_str(),
-                 m.name.c_str());
-    results.push_back(measure(m, queries, repeats));
-  }
+  const std::vector<Result> results =
+      measure(methods, queries, repeats, source.name + " into " + target.name);
   const double fot_l2_total = results[0].build_ms + results[0].query_ms;
   const double fot_l1_total = results[1].build_ms + results[1].query_ms;
   Table t(
@@ -280,15 +286,13 @@ std::string benchSearch(const std::vector<BenchScan>& scans, int repeats) {
   std::string out = "## Nearest-neighbour search (paper §IV)\n\n";
   out += format(
       "1-NN of every finite point of one scan into another, each in its own frame, as a PCL user would query "
-      "them. Times are medians of %d rounds, building from the target and then querying; caches are scrubbed "
-      "before each. The sums of distances show that every method found the same nearest distances (FOT and "
-      "FLANN bit for bit; nanoflann and pcl::search::Octree sum their float distances in another order, so "
-      "their "
-      "sums may differ in the last digits). FOT search is `pcl::fot::search::FastOctTreeSearch`; its cell "
-      "size "
-      "is given per table, and pcl::search::Octree gets the same. At the voxel level the queries are the "
-      "occupied cells of one map, in the tree's order, and the targets those of the other; the batch is "
-      "`NearestCellSearch::nearest(queries, matches)`.\n\n",
+      "them. Times are medians of %d rounds; in each round every method in turn builds from the target and "
+      "then queries, after the caches are scrubbed. The sums of distances show that every method found the "
+      "same nearest distances (FOT and FLANN bit for bit; nanoflann and pcl::search::Octree sum their float "
+      "distances in another order, so their sums may differ in the last digits). FOT search is "
+      "`pcl::fot::search::FastOctTreeSearch`; its cell size is given per table, and pcl::search::Octree gets "
+      "the same. At the voxel level the queries are the occupied cells of one map, in the tree's order, and "
+      "the targets those of the other; the batch is `NearestCellSearch::nearest(queries, matches)`.\n\n",
       repeats);
   out += body;
   out += "Summary:\n\n";
