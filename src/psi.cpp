@@ -1,6 +1,7 @@
 #include <pcl_fot/psi.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -91,16 +92,69 @@ class DirectedSum {
       sum += std::uint64_t(cap_) * cells.count();
       return sum;
     }
+    // The rest take the walk, but one walk settles many: see Certificate. The first cell left picks the
+    // sweep, towards its nearest cell along each axis, so that later cells lie between earlier ones and
+    // their nearest cells.
+    if (!cells.any()) return sum;
     constexpr unsigned side = detail::Brick::kSide;
-    for (unsigned w = 0; w < detail::Brick::kWords; ++w)
-      for (std::uint64_t left = cells.bits[w]; left; left &= left - 1) {
-        const unsigned i = w * 64 + unsigned(__builtin_ctzll(left));
-        const Key q{tree_coord::toKey(corner[0] + i % side), tree_coord::toKey(corner[1] + (i / side) % side),
-                    tree_coord::toKey(corner[2] + i / (side * side))};
-        CellMatch m;
-        sum += search_.nearest(q, m, cap_) ? std::uint64_t(m.distance) : std::uint64_t(cap_);
+    certificate_count_ = 0;
+    unsigned w = 0;
+    while (cells.bits[w] == 0) ++w;
+    const unsigned i = w * 64 + unsigned(__builtin_ctzll(cells.bits[w]));
+    cells.bits[w] &= cells.bits[w] - 1;
+    const Key q0 = cellKey(corner, i % side, (i / side) % side, i / (side * side));
+    sum += distance(q0);
+    int dir[3] = {1, 1, 1};
+    if (certificate_count_ > 0) {
+      const Key& m = certificates_[0].match;
+      dir[0] = m.x >= q0.x ? 1 : -1, dir[1] = m.y >= q0.y ? 1 : -1, dir[2] = m.z >= q0.z ? 1 : -1;
+    }
+    for (unsigned zi = 0; zi < side; ++zi)
+      for (unsigned yi = 0; yi < side; ++yi) {
+        const unsigned z = dir[2] > 0 ? zi : side - 1 - zi, y = dir[1] > 0 ? yi : side - 1 - yi;
+        const std::uint64_t row = cells.row(y, z);
+        if (row == 0) continue;
+        for (unsigned xi = 0; xi < side; ++xi) {
+          const unsigned x = dir[0] > 0 ? xi : side - 1 - xi;
+          if ((row >> x) & 1u) sum += distance(cellKey(corner, x, y, z));
+        }
       }
     return sum;
+  }
+
+  static Key cellKey(const std::uint32_t corner[3], unsigned x, unsigned y, unsigned z) {
+    return Key{tree_coord::toKey(corner[0] + x), tree_coord::toKey(corner[1] + y),
+               tree_coord::toKey(corner[2] + z)};
+  }
+
+  /**
+   * A walk's answer for cell c, nearest cell m at distance d, settles every cell q in the box spanned by c
+   * and m: there |q - m| = d - |c - q|, and no cell of b is nearer to q, or it would be nearer than d to c.
+   */
+  struct Certificate {
+    Key lo, hi, match;
+    bool holds(const Key& q) const {
+      return q.x >= lo.x && q.x <= hi.x && q.y >= lo.y && q.y <= hi.y && q.z >= lo.z && q.z <= hi.z;
+    }
+  };
+  static constexpr unsigned kCertificates = 8;  // the latest walks' answers, newest last
+
+  std::uint64_t distance(const Key& q) {
+    const unsigned n = std::min(certificate_count_, kCertificates);
+    for (unsigned k = 0; k < n; ++k) {
+      const Certificate& c = certificates_[(certificate_count_ - 1 - k) % kCertificates];
+      if (c.holds(q))
+        return std::uint64_t(std::llabs(std::int64_t(q.x) - c.match.x) +
+                             std::llabs(std::int64_t(q.y) - c.match.y) +
+                             std::llabs(std::int64_t(q.z) - c.match.z));
+    }
+    CellMatch m;
+    if (!search_.nearest(q, m, cap_)) return std::uint64_t(cap_);
+    const Key& t = m.key;
+    certificates_[certificate_count_++ % kCertificates] =
+        Certificate{Key{std::min(q.x, t.x), std::min(q.y, t.y), std::min(q.z, t.z)},
+                    Key{std::max(q.x, t.x), std::max(q.y, t.y), std::max(q.z, t.z)}, t};
+    return std::uint64_t(m.distance);
   }
 
   CellState v_;
@@ -110,6 +164,8 @@ class DirectedSum {
   ConstAccessor b_cells_;
   detail::Brick brick_;
   std::uint32_t corner_[3] = {0, 0, 0};
+  Certificate certificates_[kCertificates];  // this brick's walks
+  unsigned certificate_count_ = 0;
 };
 
 /** d(a, b, v) of eq. 2, split over threads by cell counts; integer sums, so any split gives the same. */

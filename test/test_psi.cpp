@@ -121,6 +121,35 @@ TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
   }
 }
 
+TEST(Psi, CellsFarFromTheOtherMapAgreeWithBruteForce) {
+  // Dense blocks and surfaces of a, with b's cells 17 to 90 cells away in every direction: beyond the
+  // bit dilation's reach, where one walk settles the cells between its query and the answer.
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 6; ++trial) {
+    SCOPED_TRACE(trial);
+    FastOctTree a(0.1), b(0.1);
+    std::uniform_int_distribution<int> in_block(0, 23), far(-90, 90), coin(0, 1);
+    for (int i = 0; i < 3000; ++i) {
+      const int x = in_block(rng), y = in_block(rng);
+      a.setCell(Key{x, y, trial % 2 ? in_block(rng) : (x + 2 * y) / 3}, CellState::Occupied);
+    }
+    for (int i = 0; i < 6 + 4 * trial; ++i) {
+      Key k{far(rng), far(rng), far(rng)};
+      if (k.x > -20 && k.x < 44 && k.y > -20 && k.y < 44 && k.z > -20 && k.z < 44)
+        (coin(rng) ? k.x : k.z) += k.x < 12 ? -40 : 40;
+      b.setCell(k, CellState::Occupied);
+    }
+    const std::vector<std::int64_t> caps = {std::numeric_limits<std::int64_t>::max(), 30, 55};
+    const std::vector<PsiResult> brute = bruteForcePsi(a, b, false, caps);
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+      SCOPED_TRACE(caps[i]);
+      PsiOptions o;
+      o.cap = caps[i];
+      expectSame(psi(a, b, o), brute[i], "tree");
+    }
+  }
+}
+
 TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
   struct Case {
     const char* a;
