@@ -105,6 +105,8 @@ class PartCache {
   const Entry& part(std::uint32_t x, std::uint32_t y, std::uint32_t z);
 
  private:
+  static constexpr std::size_t kSlots = 4096;  // a power of two: the slot is a mask, not a division
+
   void read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& out);
 
   const FastOctTree& tree_;

@@ -56,13 +56,20 @@ class NearestCellSearch::Measure {
   std::uint32_t q_[3];
 };
 
-/** The nearest cell: one candidate, cubes taken whole. */
+/**
+ * The nearest cell: one candidate, cubes taken whole. With the tie rule, boxes that could hold a cell at
+ * the best distance so far are still searched, for a smaller key; without it, only those that could beat it.
+ */
 class NearestCellSearch::NearestOne : public Measure {
  public:
-  NearestOne(Metric metric, const Key& query, std::int64_t limit) : Measure(metric, query), limit_(limit) {}
+  NearestOne(Metric metric, const Key& query, std::int64_t limit, bool tie_rule)
+      : Measure(metric, query),
+        limit_(limit),
+        tie_slack_(tie_rule ? 1 : 0),
+        bound_(limit < kUnbounded ? limit + 1 : limit) {}
 
-  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
-  bool settled(Distance exterior) const { return bound() < exterior; }
+  bool worthVisiting(Distance lower_bound) const { return lower_bound < bound_; }
+  bool settled(Distance exterior) const { return bound_ <= exterior; }
   bool wholeRegions() const { return true; }
   void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t) {
     std::uint32_t cell[3];
@@ -74,6 +81,7 @@ class NearestCellSearch::NearestOne : public Measure {
     if (c.distance <= limit_ && (!found_ || c < best_)) {
       best_ = c;
       found_ = true;
+      bound_ = c.distance + tie_slack_;
     }
   }
 
@@ -81,9 +89,9 @@ class NearestCellSearch::NearestOne : public Measure {
   const Candidate& best() const { return best_; }
 
  private:
-  Distance bound() const { return found_ ? best_.distance : limit_; }
-
   std::int64_t limit_;
+  Distance tie_slack_;
+  Distance bound_;  // a box is searched if its lower bound is below this
   bool found_ = false;
   Candidate best_{};
 };
@@ -127,13 +135,22 @@ NearestCellSearch::NearestCellSearch(const FastOctTree& tree, Metric metric, Cel
 }
 
 bool NearestCellSearch::nearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
+  return findNearest(query, match, max_distance, true);
+}
+
+bool NearestCellSearch::anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
+  return findNearest(query, match, max_distance, false);
+}
+
+bool NearestCellSearch::findNearest(const Key& query, CellMatch& match, std::int64_t max_distance,
+                                    bool tie_rule) {
   if (!isValidKey(query)) throwKeyOutOfRange("pcl::fot::NearestCellSearch", query);
   if (max_distance < 0) return false;
   if (accessor_.getCell(query) == target_) {  // nothing beats distance 0
     match = CellMatch{query, 0};
     return true;
   }
-  NearestOne policy(metric_, query, max_distance);
+  NearestOne policy(metric_, query, max_distance, tie_rule);
   // Queries in spatial order have nearby answers: the previous one bounds the walk from the start.
   if (has_previous_ && accessor_.getCell(previous_) == target_) {
     const std::uint32_t u[3] = {tree_coord::fromKey(previous_.x), tree_coord::fromKey(previous_.y),

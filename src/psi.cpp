@@ -20,34 +20,66 @@ std::uint64_t cellCount(const FastOctTree& t, CellState v) {
 }
 
 /**
- * Sums a's cells' distances to b's cells of one value, for a run of a's regions in Morton order. Cells are
- * taken a 16³ brick at a time. Bit dilation of b's cells around the brick settles those within 8 cells,
- * then those within 16; the nearest-tree-neighbour search finds the rest, and the cells of bricks too
- * sparse to be worth a window, each query starting from the previous one's path.
+ * A piece of a's cells in Morton order: a node word at a brick's level or below (cells read bit by bit), or
+ * a uniform cube above it.
+ */
+struct Piece {
+  std::uint32_t x, y, z;  // lowest corner, tree coordinates
+  unsigned level;
+  NodeWord word;
+};
+
+/** a's pieces holding v, in Morton order. */
+void collectPieces(const NodeWord* words, NodeWord w, unsigned level, std::uint32_t x, std::uint32_t y,
+                   std::uint32_t z, CellState v, std::vector<Piece>& out) {
+  if (node::isUniform(w)) {
+    if (node::uniformState(w) == v) out.push_back(Piece{x, y, z, level, w});
+    return;
+  }
+  if (level <= detail::kBrickLevel) {
+    if (!node::isBitmap(w) || node::octantMask(w, v) != 0) out.push_back(Piece{x, y, z, level, w});
+    return;
+  }
+  const std::uint32_t half = std::uint32_t(1) << (level - 1);
+  for (unsigned o = 0; o < 8; ++o) {
+    const NodeWord child =
+        node::isBitmap(w) ? node::uniform(node::state(w, o)) : words[node::childBase(w) + o];
+    collectPieces(words, child, level - 1, x + (o & 1u) * half, y + ((o >> 1) & 1u) * half,
+                  z + ((o >> 2) & 1u) * half, v, out);
+  }
+}
+
+/**
+ * Sums a's cells' distances to b's cells of one value, for a run of a's pieces. Cells are taken a 16³ brick
+ * at a time. Bit dilation of b's cells around the brick settles those within 8 cells, then those within
+ * 16; the nearest-tree-neighbour search finds the rest, and the cells of bricks too sparse to be worth a
+ * window, each query starting from the previous one's path.
  */
 class DirectedSum {
  public:
-  DirectedSum(const FastOctTree& b, CellState v, std::int64_t cap)
-      : v_(v), cap_(cap), windows_(b, v), search_(b, Metric::Manhattan, v), b_cells_(b) {}
+  DirectedSum(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap)
+      : a_words_(a.words()),
+        v_(v),
+        cap_(cap),
+        windows_(b, v),
+        search_(b, Metric::Manhattan, v),
+        b_cells_(b) {}
 
-  std::uint64_t regions(const Region* first, const Region* last) {
+  std::uint64_t pieces(const Piece* first, const Piece* last) {
     std::uint64_t sum = 0;
-    for (const Region* r = first; r != last; ++r) {
-      const std::uint32_t x = tree_coord::fromKey(r->min_key.x), y = tree_coord::fromKey(r->min_key.y),
-                          z = tree_coord::fromKey(r->min_key.z);
-      if (r->level >= detail::kBrickLevel) {
-        sum += cube(x, y, z, r->level);
+    for (const Piece* p = first; p != last; ++p) {
+      if (p->level >= detail::kBrickLevel && node::isUniform(p->word)) {
+        sum += cube(p->x, p->y, p->z, p->level);
         continue;
       }
-      const std::uint32_t mask = ~((1u << detail::kBrickLevel) - 1);
-      const std::uint32_t corner[3] = {x & mask, y & mask, z & mask};
-      if (!std::equal(corner, corner + 3, corner_)) {  // Morton order: a brick's cells come together
-        sum += flush();
-        std::copy(corner, corner + 3, corner_);
-      }
-      brick_.setCube(x - corner[0], y - corner[1], z - corner[2], 1u << r->level);
+      const std::uint32_t mask = ~((1u << detail::kBrickLevel) - 1);  // below a brick only in a tiny tree
+      const std::uint32_t corner[3] = {p->x & mask, p->y & mask, p->z & mask};
+      detail::Brick cells;
+      cells.setFromWord(a_words_, p->word, p->level, p->x - corner[0], p->y - corner[1], p->z - corner[2],
+                        v_);
+      if (cells.any()) sum += brick(corner, cells);
     }
-    return sum + flush();
+    return sum;
   }
 
  private:
@@ -71,14 +103,6 @@ class DirectedSum {
     std::uint64_t sum = 0;
     for (unsigned o = 0; o < 8; ++o)
       sum += cube(x + (o & 1u) * half, y + ((o >> 1) & 1u) * half, z + ((o >> 2) & 1u) * half, level - 1);
-    return sum;
-  }
-
-  /** The brick collected so far, if any. */
-  std::uint64_t flush() {
-    if (!brick_.any()) return 0;
-    const std::uint64_t sum = brick(corner_, brick_);
-    brick_ = detail::Brick{};
     return sum;
   }
 
@@ -149,7 +173,7 @@ class DirectedSum {
                              std::llabs(std::int64_t(q.z) - c.match.z));
     }
     CellMatch m;
-    if (!search_.nearest(q, m, cap_)) return std::uint64_t(cap_);
+    if (!search_.anyNearest(q, m, cap_)) return std::uint64_t(cap_);
     const Key& t = m.key;
     certificates_[certificate_count_++ % kCertificates] =
         Certificate{Key{std::min(q.x, t.x), std::min(q.y, t.y), std::min(q.z, t.z)},
@@ -157,39 +181,29 @@ class DirectedSum {
     return std::uint64_t(m.distance);
   }
 
+  const NodeWord* a_words_;
   CellState v_;
   std::int64_t cap_;
   detail::BrickSettler windows_;
   NearestCellSearch search_;
   ConstAccessor b_cells_;
-  detail::Brick brick_;
-  std::uint32_t corner_[3] = {0, 0, 0};
   Certificate certificates_[kCertificates];  // this brick's walks
   unsigned certificate_count_ = 0;
 };
 
-/** d(a, b, v) of eq. 2, split over threads by cell counts; integer sums, so any split gives the same. */
+/** d(a, b, v) of eq. 2, split over threads by bricks; integer sums, so any split gives the same. */
 std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap,
                        unsigned threads) {
-  std::vector<Region> regions;
-  std::vector<std::uint64_t> cells_before;  // running cell count, for splitting the work evenly
-  std::uint64_t total = 0;
-  a.forEachRegion([&](const Region& r) {
-    if (r.state != v) return;
-    regions.push_back(r);
-    cells_before.push_back(total);
-    total += std::uint64_t(1) << (3 * std::min(r.level, 21u));
-  });
-  const unsigned workers = std::max(1u, std::min<unsigned>(threads, unsigned(regions.size())));
-  std::vector<std::size_t> bounds(workers + 1, regions.size());
-  bounds[0] = 0;
-  for (unsigned w = 1; w < workers; ++w)
-    bounds[w] = std::size_t(std::lower_bound(cells_before.begin(), cells_before.end(), total / workers * w) -
-                            cells_before.begin());
+  std::vector<Piece> pieces;
+  collectPieces(a.words(), a.rootWord(), a.rootLevel(), a.rootBase()[0], a.rootBase()[1], a.rootBase()[2], v,
+                pieces);
+  const unsigned workers = std::max(1u, std::min<unsigned>(threads, unsigned(pieces.size())));
+  std::vector<std::size_t> bounds(workers + 1, pieces.size());
+  for (unsigned w = 0; w < workers; ++w) bounds[w] = pieces.size() * w / workers;
   std::vector<std::uint64_t> sums(workers, 0);
   auto work = [&](unsigned w) {
-    DirectedSum sum(b, v, cap);
-    sums[w] = sum.regions(regions.data() + bounds[w], regions.data() + bounds[w + 1]);
+    DirectedSum sum(a, b, v, cap);
+    sums[w] = sum.pieces(pieces.data() + bounds[w], pieces.data() + bounds[w + 1]);
   };
   std::vector<std::thread> pool;
   for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work, w);

@@ -54,6 +54,13 @@ void checkQueries(const FastOctTree& tree, CellState target, const std::vector<K
       ASSERT_TRUE(search.nearest(q, one));
       ASSERT_EQ(one.key, all[0].key) << "1-NN of " << toString(q);
       ASSERT_EQ(one.distance, all[0].distance);
+      // Without the tie rule: some target cell at the same distance.
+      ASSERT_TRUE(search.anyNearest(q, one));
+      ASSERT_EQ(one.distance, all[0].distance) << "any nearest of " << toString(q);
+      ASSERT_EQ(distance(m, one.key, q), one.distance);
+      ASSERT_EQ(tree.getCell(one.key), target);
+      EXPECT_FALSE(search.anyNearest(q, one, all[0].distance - 1));
+      EXPECT_TRUE(search.anyNearest(q, one, all[0].distance));
       search.nearestK(q, 7, got);
       expectSame(std::vector<CellMatch>(all.begin(), all.begin() + std::min<std::size_t>(7, all.size())), got,
                  "k-NN");

@@ -259,6 +259,11 @@ class NearestCellSearch {
   /** The nearest target cell within max_distance (inclusive); false if there is none. */
   bool nearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
   /**
+   * nearest() without the tie rule: a target cell at the least distance, not necessarily the smallest key.
+   * Faster where only the distance counts, as in ψ: boxes that could only tie are not searched.
+   */
+  bool anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
+  /**
    * nearest() for many queries: matches[i] answers queries[i], with distance -1 where no target cell lies
    * within max_distance; returns how many were found. The answers are nearest()'s, in any order of the
    * queries. In the Manhattan metric the queries are taken a 16³ brick at a time, in Morton order, and the
@@ -300,6 +305,7 @@ class NearestCellSearch {
   class NearestOne;
   class NearestK;
 
+  bool findNearest(const Key& query, CellMatch& match, std::int64_t max_distance, bool tie_rule);
   /** Fills heap_ with the best candidates, sorted; reuses its storage from query to query. */
   void search(const Key& query, std::size_t k, std::int64_t bound);
   std::size_t copyMatches(std::vector<CellMatch>& matches) const;
