@@ -65,21 +65,51 @@ bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
   return any;
 }
 
-template <unsigned Reach>
-auto BrickWindow<Reach>::dilate(unsigned step) -> const Row* {
-  // Step 1 reads the tree's cells, later steps the buffer the previous one wrote.
-  const Row* __restrict in = rows(step == 1 ? kTargets : (step & 1u));
-  Row* __restrict out = rows((step & 1u) ^ 1u);
-  // Errors from the unseen outside move inwards one row per step: later steps read only [step, kWindow -
-  // step). Distinct buffers (restrict) let the compiler take several rows per instruction.
-  for (std::size_t z = step; z < kWindow - step; ++z) {
-    const Row* __restrict c = in + z * kWindow;
-    const Row* __restrict below = c - kWindow;
-    const Row* __restrict above = c + kWindow;
-    Row* __restrict o = out + z * kWindow;
-    for (std::size_t y = step; y < kWindow - step; ++y)
+namespace {
+
+// The dilation is plain bit logic on many rows: where the CPU has AVX2, a clone of it takes twice the rows
+// per instruction, picked when the library loads.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define PCL_FOT_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define PCL_FOT_AVX2_CLONE
+#endif
+
+/** One dilation step over the rows [step, W - step)² of a W × W × W window; see BrickWindow::dilate. */
+template <typename Row>
+inline void dilateRows(const Row* __restrict in, Row* __restrict out, std::size_t w, std::size_t step) {
+  for (std::size_t z = step; z < w - step; ++z) {
+    const Row* __restrict c = in + z * w;
+    const Row* __restrict below = c - w;
+    const Row* __restrict above = c + w;
+    Row* __restrict o = out + z * w;
+    for (std::size_t y = step; y < w - step; ++y)
       o[y] = c[y] | Row(c[y] << 1) | Row(c[y] >> 1) | c[y - 1] | c[y + 1] | below[y] | above[y];
   }
+}
+
+// Clones are made of plain functions only: one per row width.
+PCL_FOT_AVX2_CLONE void dilateRows32(const std::uint32_t* in, std::uint32_t* out, std::size_t w,
+                                     std::size_t step) {
+  dilateRows(in, out, w, step);
+}
+PCL_FOT_AVX2_CLONE void dilateRows64(const std::uint64_t* in, std::uint64_t* out, std::size_t w,
+                                     std::size_t step) {
+  dilateRows(in, out, w, step);
+}
+
+}  // namespace
+
+template <unsigned Reach>
+auto BrickWindow<Reach>::dilate(unsigned step) -> const Row* {
+  // Step 1 reads the tree's cells, later steps the buffer the previous one wrote. Errors from the unseen
+  // outside move inwards one row per step: later steps read only [step, kWindow - step).
+  const Row* in = rows(step == 1 ? kTargets : (step & 1u));
+  Row* out = rows((step & 1u) ^ 1u);
+  if constexpr (sizeof(Row) == 4)
+    dilateRows32(in, out, kWindow, step);
+  else
+    dilateRows64(in, out, kWindow, step);
   return out;
 }
 
