@@ -62,10 +62,11 @@ class NearestCellSearch::Measure {
  */
 class NearestCellSearch::NearestOne : public Measure {
  public:
-  NearestOne(Metric metric, const Key& query, std::int64_t limit, bool tie_rule)
+  NearestOne(Metric metric, const Key& query, std::int64_t limit, bool tie_rule, Distance floor)
       : Measure(metric, query),
         limit_(limit),
         tie_slack_(tie_rule ? 1 : 0),
+        floor_(floor),
         bound_(limit < kUnbounded ? limit + 1 : limit) {}
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound < bound_; }
@@ -81,7 +82,7 @@ class NearestCellSearch::NearestOne : public Measure {
     if (c.distance <= limit_ && (!found_ || c < best_)) {
       best_ = c;
       found_ = true;
-      bound_ = c.distance + tie_slack_;
+      bound_ = c.distance <= floor_ ? 0 : c.distance + tie_slack_;  // at the floor nothing can beat it
     }
   }
 
@@ -91,6 +92,7 @@ class NearestCellSearch::NearestOne : public Measure {
  private:
   std::int64_t limit_;
   Distance tie_slack_;
+  Distance floor_;  // no cell lies nearer
   Distance bound_;  // a box is searched if its lower bound is below this
   bool found_ = false;
   Candidate best_{};
@@ -135,22 +137,23 @@ NearestCellSearch::NearestCellSearch(const FastOctTree& tree, Metric metric, Cel
 }
 
 bool NearestCellSearch::nearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
-  return findNearest(query, match, max_distance, true);
+  return findNearest(query, match, max_distance, true, -1);
 }
 
-bool NearestCellSearch::anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance) {
-  return findNearest(query, match, max_distance, false);
+bool NearestCellSearch::anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance,
+                                   std::int64_t min_distance) {
+  return findNearest(query, match, max_distance, false, min_distance);
 }
 
 bool NearestCellSearch::findNearest(const Key& query, CellMatch& match, std::int64_t max_distance,
-                                    bool tie_rule) {
+                                    bool tie_rule, std::int64_t floor) {
   if (!isValidKey(query)) throwKeyOutOfRange("pcl::fot::NearestCellSearch", query);
   if (max_distance < 0) return false;
   if (accessor_.getCell(query) == target_) {  // nothing beats distance 0
     match = CellMatch{query, 0};
     return true;
   }
-  NearestOne policy(metric_, query, max_distance, tie_rule);
+  NearestOne policy(metric_, query, max_distance, tie_rule, floor);
   // Queries in spatial order have nearby answers: the previous one bounds the walk from the start.
   if (has_previous_ && accessor_.getCell(previous_) == target_) {
     const std::uint32_t u[3] = {tree_coord::fromKey(previous_.x), tree_coord::fromKey(previous_.y),

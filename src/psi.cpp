@@ -120,6 +120,7 @@ class DirectedSum {
     // sweep, towards its nearest cell along each axis, so that later cells lie between earlier ones and
     // their nearest cells.
     if (!cells.any()) return sum;
+    floor_ = settled + 1;
     constexpr unsigned side = detail::Brick::kSide;
     certificate_count_ = 0;
     unsigned w = 0;
@@ -152,32 +153,33 @@ class DirectedSum {
   }
 
   /**
-   * A walk's answer for cell c, nearest cell m at distance d, settles every cell q in the box spanned by c
-   * and m: there |q - m| = d - |c - q|, and no cell of b is nearer to q, or it would be nearer than d to c.
+   * A walk's answer for cell c, nearest cell m at distance d, bounds the distance of every cell q:
+   * d - |c - q| <= d(q) <= |q - m|. The bounds meet in the box spanned by c and m, and where those of
+   * different walks meet; otherwise the lower one still lets q's walk stop at the first cell that near.
    */
   struct Certificate {
-    Key lo, hi, match;
-    bool holds(const Key& q) const {
-      return q.x >= lo.x && q.x <= hi.x && q.y >= lo.y && q.y <= hi.y && q.z >= lo.z && q.z <= hi.z;
-    }
+    Key query, match;
+    std::int64_t distance;
   };
   static constexpr unsigned kCertificates = 8;  // the latest walks' answers, newest last
 
+  static std::int64_t manhattan(const Key& a, const Key& b) {
+    return std::llabs(std::int64_t(a.x) - b.x) + std::llabs(std::int64_t(a.y) - b.y) +
+           std::llabs(std::int64_t(a.z) - b.z);
+  }
+
   std::uint64_t distance(const Key& q) {
+    std::int64_t lower = floor_, upper = NearestCellSearch::kUnbounded;
     const unsigned n = std::min(certificate_count_, kCertificates);
     for (unsigned k = 0; k < n; ++k) {
-      const Certificate& c = certificates_[(certificate_count_ - 1 - k) % kCertificates];
-      if (c.holds(q))
-        return std::uint64_t(std::llabs(std::int64_t(q.x) - c.match.x) +
-                             std::llabs(std::int64_t(q.y) - c.match.y) +
-                             std::llabs(std::int64_t(q.z) - c.match.z));
+      const Certificate& c = certificates_[k];
+      lower = std::max(lower, c.distance - manhattan(q, c.query));
+      upper = std::min(upper, manhattan(q, c.match));
     }
+    if (lower >= upper || lower >= cap_) return std::uint64_t(std::min(upper, cap_));
     CellMatch m;
-    if (!search_.anyNearest(q, m, cap_)) return std::uint64_t(cap_);
-    const Key& t = m.key;
-    certificates_[certificate_count_++ % kCertificates] =
-        Certificate{Key{std::min(q.x, t.x), std::min(q.y, t.y), std::min(q.z, t.z)},
-                    Key{std::max(q.x, t.x), std::max(q.y, t.y), std::max(q.z, t.z)}, t};
+    if (!search_.anyNearest(q, m, cap_, lower)) return std::uint64_t(cap_);
+    certificates_[certificate_count_++ % kCertificates] = Certificate{q, m.key, m.distance};
     return std::uint64_t(m.distance);
   }
 
@@ -189,6 +191,7 @@ class DirectedSum {
   ConstAccessor b_cells_;
   Certificate certificates_[kCertificates];  // this brick's walks
   unsigned certificate_count_ = 0;
+  std::int64_t floor_ = 0;  // this brick's cells left lie further than its windows reached
 };
 
 /** d(a, b, v) of eq. 2, split over threads by bricks; integer sums, so any split gives the same. */

@@ -61,6 +61,11 @@ void checkQueries(const FastOctTree& tree, CellState target, const std::vector<K
       ASSERT_EQ(tree.getCell(one.key), target);
       EXPECT_FALSE(search.anyNearest(q, one, all[0].distance - 1));
       EXPECT_TRUE(search.anyNearest(q, one, all[0].distance));
+      // A true lower bound lets the walk stop early, at the right distance.
+      for (std::int64_t floor : {all[0].distance - 1, all[0].distance}) {
+        ASSERT_TRUE(search.anyNearest(q, one, NearestCellSearch::kUnbounded, floor));
+        ASSERT_EQ(one.distance, all[0].distance) << "any nearest of " << toString(q) << " above " << floor;
+      }
       search.nearestK(q, 7, got);
       expectSame(std::vector<CellMatch>(all.begin(), all.begin() + std::min<std::size_t>(7, all.size())), got,
                  "k-NN");

@@ -260,9 +260,12 @@ class NearestCellSearch {
   bool nearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
   /**
    * nearest() without the tie rule: a target cell at the least distance, not necessarily the smallest key.
-   * Faster where only the distance counts, as in ψ: boxes that could only tie are not searched.
+   * Faster where only the distance counts, as in ψ: boxes that could only tie are not searched. A caller
+   * that knows no target cell lies nearer than min_distance passes it, and the walk stops at the first
+   * cell that near.
    */
-  bool anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded);
+  bool anyNearest(const Key& query, CellMatch& match, std::int64_t max_distance = kUnbounded,
+                  std::int64_t min_distance = 0);
   /**
    * nearest() for many queries: matches[i] answers queries[i], with distance -1 where no target cell lies
    * within max_distance; returns how many were found. The answers are nearest()'s, in any order of the
@@ -305,7 +308,8 @@ class NearestCellSearch {
   class NearestOne;
   class NearestK;
 
-  bool findNearest(const Key& query, CellMatch& match, std::int64_t max_distance, bool tie_rule);
+  bool findNearest(const Key& query, CellMatch& match, std::int64_t max_distance, bool tie_rule,
+                   std::int64_t floor);
   /** Fills heap_ with the best candidates, sorted; reuses its storage from query to query. */
   void search(const Key& query, std::size_t k, std::int64_t bound);
   std::size_t copyMatches(std::vector<CellMatch>& matches) const;
