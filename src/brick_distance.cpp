@@ -67,17 +67,17 @@ bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
 
 namespace {
 
-// The dilation is plain bit logic on many rows: where the CPU has AVX2, a clone of it takes twice the rows
-// per instruction, picked when the library loads.
+// The dilation is plain bit logic on many rows: where the CPU has AVX2, a build of the loop for it takes
+// twice the rows per instruction. It is chosen at run time, not by ifunc (target_clones): the loader runs
+// ifunc resolvers before ThreadSanitizer's runtime is ready, and the program crashes.
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define PCL_FOT_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define PCL_FOT_AVX2_CLONE
+#define PCL_FOT_AVX2_PATH 1
 #endif
 
 /** One dilation step over the rows [step, W - step)² of a W × W × W window; see BrickWindow::dilate. */
 template <typename Row>
-inline void dilateRows(const Row* __restrict in, Row* __restrict out, std::size_t w, std::size_t step) {
+__attribute__((always_inline)) inline void dilateRows(const Row* __restrict in, Row* __restrict out,
+                                                      std::size_t w, std::size_t step) {
   for (std::size_t z = step; z < w - step; ++z) {
     const Row* __restrict c = in + z * w;
     const Row* __restrict below = c - w;
@@ -88,13 +88,29 @@ inline void dilateRows(const Row* __restrict in, Row* __restrict out, std::size_
   }
 }
 
-// Clones are made of plain functions only: one per row width.
-PCL_FOT_AVX2_CLONE void dilateRows32(const std::uint32_t* in, std::uint32_t* out, std::size_t w,
-                                     std::size_t step) {
+#ifdef PCL_FOT_AVX2_PATH
+__attribute__((target("avx2"))) void dilateRowsAvx2(const std::uint32_t* in, std::uint32_t* out,
+                                                    std::size_t w, std::size_t step) {
   dilateRows(in, out, w, step);
 }
-PCL_FOT_AVX2_CLONE void dilateRows64(const std::uint64_t* in, std::uint64_t* out, std::size_t w,
-                                     std::size_t step) {
+__attribute__((target("avx2"))) void dilateRowsAvx2(const std::uint64_t* in, std::uint64_t* out,
+                                                    std::size_t w, std::size_t step) {
+  dilateRows(in, out, w, step);
+}
+bool hasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+template <typename Row>
+void dilateStep(const Row* in, Row* out, std::size_t w, std::size_t step) {
+#ifdef PCL_FOT_AVX2_PATH
+  if (hasAvx2()) {
+    dilateRowsAvx2(in, out, w, step);
+    return;
+  }
+#endif
   dilateRows(in, out, w, step);
 }
 
@@ -104,12 +120,8 @@ template <unsigned Reach>
 auto BrickWindow<Reach>::dilate(unsigned step) -> const Row* {
   // Step 1 reads the tree's cells, later steps the buffer the previous one wrote. Errors from the unseen
   // outside move inwards one row per step: later steps read only [step, kWindow - step).
-  const Row* in = rows(step == 1 ? kTargets : (step & 1u));
   Row* out = rows((step & 1u) ^ 1u);
-  if constexpr (sizeof(Row) == 4)
-    dilateRows32(in, out, kWindow, step);
-  else
-    dilateRows64(in, out, kWindow, step);
+  dilateStep(rows(step == 1 ? kTargets : (step & 1u)), out, kWindow, step);
   return out;
 }
 
