@@ -13,12 +13,14 @@ namespace fot {
 namespace {
 
 /**
- * The tree's side. With LineBurstAccess, a ray's cells come grouped by leaf, so they are marked free a
- * leaf word at a time, and cubes the tree reports free already are passed without touching it: the last
- * visited node answers for the next cells. Phase 1 only ever adds free cells, so a cube found free stays
- * free, even for the following rays; so do the cells written lately, which a small table remembers:
- * neighbouring rays cross the same leaves again and again. Without LineBurstAccess, every cell is its own
- * access from the root.
+ * The tree's side. With LineBurstAccess, a ray's cells come grouped by leaf, and a table remembers the
+ * 4×4×4 blocks written lately: neighbouring rays cross the same leaves again and again, and the table
+ * answers for them. A block's first leaf is written at once, so that a cube the tree reports free already
+ * is passed without touching it: the last visited node answers for the next cells. The block's later cells
+ * wait in the table and go into the tree a block at a time, when another block takes the slot or the rays
+ * are done: one short access per leaf instead of one from wherever the ray was. Phase 1 only ever adds
+ * free cells, so a cube found free stays free. Without LineBurstAccess, every cell is its own access from
+ * the root.
  */
 class TreeWriter {
  public:
@@ -36,6 +38,11 @@ class TreeWriter {
     return traceSegmentLeaves(grid, from, to, [&](const Key& k, std::uint32_t mask) { freeLeaf(k, mask); });
   }
 
+  /** Writes the cells still waiting in the table; the rays' free cells are all in the tree afterwards. */
+  void finishFree() {
+    for (Written& w : written_) flush(w);
+  }
+
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
 
  private:
@@ -43,6 +50,7 @@ class TreeWriter {
   struct Written {
     std::uint32_t block[3] = {0, 0, 0};  // tree coordinates / 4
     std::uint64_t cells = 0;             // bit 8 * leaf + octant
+    std::uint64_t pending = 0;           // the subset not written to the tree yet
   };
 
   void freeLeaf(const Key& k, std::uint32_t mask) {
@@ -51,15 +59,32 @@ class TreeWriter {
     const std::uint32_t block[3] = {u[0] >> 2, u[1] >> 2, u[2] >> 2};
     Written& w = written_[(block[0] * 0x9E3779B1u ^ block[1] * 0x85EBCA77u ^ block[2] * 0xC2B2AE3Du) >>
                           (32 - written_bits_)];
-    const bool same = w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2];
     const std::uint64_t cells = std::uint64_t(mask) << (8 * tree_coord::octant(u[0], u[1], u[2], 2));
-    if (same && (cells & ~w.cells) == 0) return;  // neighbouring rays cross the same leaves again and again
-    const unsigned skip = accessor_.setValidLeafCells(k, mask, CellState::Free);
-    w.cells = (same ? w.cells : 0u) | cells;
+    if (w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2]) {
+      w.pending |= cells & ~w.cells;
+      w.cells |= cells;
+      return;
+    }
+    flush(w);
     w.block[0] = block[0], w.block[1] = block[1], w.block[2] = block[2];
+    w.cells = cells;
+    const unsigned skip = accessor_.setValidLeafCells(k, mask, CellState::Free);
     if (skip == 0) return;
     skip_ = skip;
     cube_[0] = u[0], cube_[1] = u[1], cube_[2] = u[2];
+  }
+
+  void flush(Written& w) {
+    if (w.pending == 0) return;
+    for (unsigned leaf = 0; leaf < 8; ++leaf) {
+      const std::uint32_t mask = std::uint32_t(w.pending >> (8 * leaf)) & 0xFFu;
+      if (mask == 0) continue;
+      const Key k{tree_coord::toKey(4 * w.block[0] + 2 * (leaf & 1u)),
+                  tree_coord::toKey(4 * w.block[1] + (leaf & 2u)),
+                  tree_coord::toKey(4 * w.block[2] + (leaf & 4u) / 2)};
+      accessor_.setValidLeafCells(k, mask, CellState::Free);
+    }
+    w.pending = 0;
   }
 
   Accessor accessor_;
@@ -78,6 +103,7 @@ class GridWriter {
       if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
     });
   }
+  void finishFree() {}
   void occupied(const Key& k) {
     if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
   }
@@ -141,6 +167,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
     ++stats.rays;
   }
   // Endpoints last: within a scan, occupied wins over free.
+  writer.finishFree();
   for (const Key& k : endpoints) writer.occupied(k);
   stats.occupied = endpoints.size();
   return stats;
