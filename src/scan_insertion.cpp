@@ -17,10 +17,10 @@ namespace {
  * 4×4×4 blocks written lately: neighbouring rays cross the same leaves again and again, and the table
  * answers for them. A block's first leaf is written at once, so that a cube the tree reports free already
  * is passed without touching it: the last visited node answers for the next cells. The block's later cells
- * wait in the table and go into the tree a block at a time, when another block takes the slot or the rays
- * are done: one short access per leaf instead of one from wherever the ray was. Phase 1 only ever adds
- * free cells, so a cube found free stays free. Without LineBurstAccess, every cell is its own access from
- * the root.
+ * wait in the table and go into the tree a block at a time, when another block takes the slot, the block
+ * is all free, or the rays are done: one short access per leaf instead of one from wherever the ray was.
+ * Phase 1 only ever adds free cells, so a cube found free stays free. Without LineBurstAccess, every cell is
+ * its own access from the root.
  */
 class TreeWriter {
  public:
@@ -63,6 +63,7 @@ class TreeWriter {
     if (w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2]) {
       w.pending |= cells & ~w.cells;
       w.cells |= cells;
+      if (w.cells == ~std::uint64_t(0)) flush(w);  // a whole free block: let the tree fold it now
       return;
     }
     flush(w);
