@@ -6,21 +6,34 @@
 #include <vector>
 
 #include <pcl_fot/accessor.h>
-#include <pcl_fot/ray_caster.h>
+
+#include "block_ray_walker.h"
 
 namespace pcl {
 namespace fot {
 namespace {
 
+/** Calls `visit(const Key&)` for each cell of the walker's stretch `i`. */
+template <typename Visit>
+void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& visit) {
+  const std::uint32_t block[3] = {walker.blockX(i), walker.blockY(i), walker.blockZ(i)};
+  for (std::uint64_t cells = walker.cells(i); cells != 0; cells &= cells - 1) {
+    const unsigned bit = unsigned(__builtin_ctzll(cells)), leaf = bit / 8, cell = bit % 8;
+    visit(Key{tree_coord::toKey(4 * block[0] + 2 * (leaf & 1u) + (cell & 1u)),
+              tree_coord::toKey(4 * block[1] + (leaf & 2u) + (cell & 2u) / 2),
+              tree_coord::toKey(4 * block[2] + (leaf & 4u) / 2 + (cell & 4u) / 4)});
+  }
+}
+
 /**
- * The tree's side. With LineBurstAccess, a ray's cells come grouped by leaf, and a table remembers the
- * 4×4×4 blocks written lately: neighbouring rays cross the same leaves again and again, and the table
- * answers for them. A block's first leaf is written at once, so that a cube the tree reports free already
- * is passed without touching it: the last visited node answers for the next cells. The block's later cells
- * wait in the table and go into the tree a block at a time, when another block takes the slot, the block
- * is all free, or the rays are done: one short access per leaf instead of one from wherever the ray was.
- * Phase 1 only ever adds free cells, so a cube found free stays free. Without LineBurstAccess, every cell is
- * its own access from the root.
+ * The tree's side. With LineBurstAccess, the rays' cells come a 4×4×4 block at a time, and a table
+ * remembers the blocks written lately: neighbouring rays cross the same blocks again and again, and the
+ * table answers for them. A block's first leaf is written at once, so that a cube the tree reports free
+ * already is passed without touching it: the last visited node answers for the next cells. The block's
+ * other cells wait in the table and go into the tree a block at a time, when another block takes the slot,
+ * the block is all free, or the rays are done: one short access per leaf instead of one from wherever the
+ * last ray was. Phase 1 only ever adds free cells, so a cube found free stays free. Without
+ * LineBurstAccess, every cell is its own access from the root.
  */
 class TreeWriter {
  public:
@@ -32,10 +45,12 @@ class TreeWriter {
     written_.resize(std::size_t(1) << written_bits_);
   }
 
-  std::size_t freeRay(const VoxelGrid& grid, const float from[3], const float to[3]) {
-    if (!line_burst_)
-      return traceSegment(grid, from, to, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
-    return traceSegmentLeaves(grid, from, to, [&](const Key& k, std::uint32_t mask) { freeLeaf(k, mask); });
+  void freeStretch(const detail::BlockRayWalker& walker, std::size_t i) {
+    if (!line_burst_) {
+      forEachCell(walker, i, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
+      return;
+    }
+    freeBlock({walker.blockX(i), walker.blockY(i), walker.blockZ(i)}, walker.cells(i));
   }
 
   /** Writes the cells still waiting in the table; the rays' free cells are all in the tree afterwards. */
@@ -53,13 +68,13 @@ class TreeWriter {
     std::uint64_t pending = 0;           // the subset not written to the tree yet
   };
 
-  void freeLeaf(const Key& k, std::uint32_t mask) {
-    const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z)};
-    if (skip_ != 0 && ((u[0] ^ cube_[0]) | (u[1] ^ cube_[1]) | (u[2] ^ cube_[2])) >> skip_ == 0) return;
-    const std::uint32_t block[3] = {u[0] >> 2, u[1] >> 2, u[2] >> 2};
-    Written& w = written_[(block[0] * 0x9E3779B1u ^ block[1] * 0x85EBCA77u ^ block[2] * 0xC2B2AE3Du) >>
-                          (32 - written_bits_)];
-    const std::uint64_t cells = std::uint64_t(mask) << (8 * tree_coord::octant(u[0], u[1], u[2], 2));
+  void freeBlock(const std::uint32_t (&block)[3], std::uint64_t cells) {
+    if (skip_ != 0 &&
+        (((block[0] << 2) ^ cube_[0]) | ((block[1] << 2) ^ cube_[1]) | ((block[2] << 2) ^ cube_[2])) >>
+                skip_ ==
+            0)
+      return;
+    Written& w = entry(block);
     if (w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2]) {
       w.pending |= cells & ~w.cells;
       w.cells |= cells;
@@ -69,21 +84,32 @@ class TreeWriter {
     flush(w);
     w.block[0] = block[0], w.block[1] = block[1], w.block[2] = block[2];
     w.cells = cells;
-    const unsigned skip = accessor_.setValidLeafCells(k, mask, CellState::Free);
-    if (skip == 0) return;
+    const unsigned leaf = unsigned(__builtin_ctzll(cells)) / 8;
+    w.pending = cells & ~(std::uint64_t(0xFF) << (8 * leaf));
+    const unsigned skip = accessor_.setValidLeafCells(
+        leafKey(w.block, leaf), std::uint32_t(cells >> (8 * leaf)) & 0xFFu, CellState::Free);
+    if (skip < 2) return;  // the cube must hold whole blocks
     skip_ = skip;
-    cube_[0] = u[0], cube_[1] = u[1], cube_[2] = u[2];
+    cube_[0] = block[0] << 2, cube_[1] = block[1] << 2, cube_[2] = block[2] << 2;
+  }
+
+  Written& entry(const std::uint32_t (&block)[3]) {
+    return written_[(block[0] * 0x9E3779B1u ^ block[1] * 0x85EBCA77u ^ block[2] * 0xC2B2AE3Du) >>
+                    (32 - written_bits_)];
+  }
+
+  static Key leafKey(const std::uint32_t (&block)[3], unsigned leaf) {
+    return Key{tree_coord::toKey(4 * block[0] + 2 * (leaf & 1u)),
+               tree_coord::toKey(4 * block[1] + (leaf & 2u)),
+               tree_coord::toKey(4 * block[2] + (leaf & 4u) / 2)};
   }
 
   void flush(Written& w) {
-    if (w.pending == 0) return;
-    for (unsigned leaf = 0; leaf < 8; ++leaf) {
-      const std::uint32_t mask = std::uint32_t(w.pending >> (8 * leaf)) & 0xFFu;
-      if (mask == 0) continue;
-      const Key k{tree_coord::toKey(4 * w.block[0] + 2 * (leaf & 1u)),
-                  tree_coord::toKey(4 * w.block[1] + (leaf & 2u)),
-                  tree_coord::toKey(4 * w.block[2] + (leaf & 4u) / 2)};
-      accessor_.setValidLeafCells(k, mask, CellState::Free);
+    for (std::uint64_t p = w.pending; p != 0;) {
+      const unsigned leaf = unsigned(__builtin_ctzll(p)) / 8;
+      accessor_.setValidLeafCells(leafKey(w.block, leaf), std::uint32_t(p >> (8 * leaf)) & 0xFFu,
+                                  CellState::Free);
+      p &= ~(std::uint64_t(0xFF) << (8 * leaf));
     }
     w.pending = 0;
   }
@@ -99,8 +125,8 @@ class TreeWriter {
 class GridWriter {
  public:
   explicit GridWriter(FastOccMesh& g) : grid_(g) {}
-  std::size_t freeRay(const VoxelGrid& grid, const float from[3], const float to[3]) {
-    return traceSegment(grid, from, to, [&](const Key& k) {
+  void freeStretch(const detail::BlockRayWalker& walker, std::size_t i) {
+    forEachCell(walker, i, [&](const Key& k) {
       if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
     });
   }
@@ -128,6 +154,8 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
     throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
 
   ScanStats stats;
+  std::vector<float> ends;  // xyz of each ray's end
+  ends.reserve(3 * count);
   std::vector<Key> endpoints;
   endpoints.reserve(count);
   const char* bytes = reinterpret_cast<const char*>(xyz);
@@ -153,7 +181,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
         ++stats.out_of_range;
         continue;
       }
-      stats.ray_cells += writer.freeRay(grid, sensor, end);
+      ends.insert(ends.end(), end, end + 3);
       ++stats.truncated;
       ++stats.rays;
       continue;
@@ -163,12 +191,16 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
       ++stats.out_of_range;
       continue;
     }
-    stats.ray_cells += writer.freeRay(grid, sensor, p);
+    ends.insert(ends.end(), p, p + 3);
     endpoints.push_back(key);
     ++stats.rays;
   }
-  // Endpoints last: within a scan, occupied wins over free.
+  detail::BlockRayWalker walker(grid, sensor, ends.data(), ends.size() / 3);
+  while (const std::size_t n = walker.next())
+    for (std::size_t i = 0; i < n; ++i) writer.freeStretch(walker, i);
   writer.finishFree();
+  stats.ray_cells = walker.cellCount();
+  // Endpoints last: within a scan, occupied wins over free.
   for (const Key& k : endpoints) writer.occupied(k);
   stats.occupied = endpoints.size();
   return stats;

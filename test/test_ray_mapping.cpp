@@ -1,6 +1,8 @@
 // Ray tracing and scan insertion, checked cell for cell against OctoMap on real scans.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -15,6 +17,7 @@
 #include <pcl_fot/occupancy_mapping.h>
 #include <pcl_fot/ray_caster.h>
 
+#include "block_ray_walker.h"
 #include "scan_data.h"
 
 using namespace pcl::fot;
@@ -132,38 +135,63 @@ TEST(RayCaster, SegmentEndsExcludeTheEndCell) {
   EXPECT_EQ(traceSegment(grid, o, nan, [](const Key&) { ADD_FAILURE(); }), 0u);
 }
 
-TEST(RayCaster, LeafGroupsAreTheWalksCellsSplitAtEveryLeafChange) {
+TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
+  using detail::BlockRayWalker;
+  using Stretch = std::array<std::uint64_t, 4>;  // block x, y, z and cells
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> coord(-3.0f, 3.0f);
-  for (double res : {0.01, 0.05, 0.3}) {
+  for (double res : {0.01, 0.05, 0.0625, 0.3}) {
     const VoxelGrid grid(res);
-    for (int r = 0; r < 300; ++r) {
-      const float o[3] = {coord(rng), coord(rng), coord(rng)}, e[3] = {coord(rng), coord(rng), coord(rng)};
-      const std::vector<Key> cells = ourRay(grid, o, e);
-      // The expected groups: maximal stretches of consecutive cells in one leaf of tree coordinates.
-      std::vector<std::pair<Key, std::uint32_t>> expected;
-      for (const Key& k : cells) {
-        const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y),
-                                    tree_coord::fromKey(k.z)};
-        const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
-        if (!expected.empty()) {
-          const Key& f = expected.back().first;
-          if (tree_coord::fromKey(f.x) >> 1 == u[0] >> 1 && tree_coord::fromKey(f.y) >> 1 == u[1] >> 1 &&
-              tree_coord::fromKey(f.z) >> 1 == u[2] >> 1) {
-            expected.back().second |= bit;
-            continue;
-          }
+    // A sensor anywhere, and one at a cell centre: from there, at a power-of-two resolution, exact
+    // diagonals tie at every crossing.
+    const float centre = float(0.5 * res);
+    for (const std::array<float, 3>& at : {std::array<float, 3>{coord(rng), coord(rng), coord(rng)},
+                                           std::array<float, 3>{centre, centre, centre}}) {
+      const float* sensor = at.data();
+      // Rays of every length, a fan of neighbours as a scan has, and one inside the sensor's cell.
+      std::vector<float> ends;
+      for (int r = 0; r < 500; ++r)
+        for (float c : {coord(rng), coord(rng), coord(rng)}) ends.push_back(c);
+      for (int r = 0; r < 200; ++r)
+        for (float c : {2.5f + 0.001f * float(r), -1.0f + 0.002f * float(r), 0.3f}) ends.push_back(c);
+      ends.insert(ends.end(), sensor, sensor + 3);
+      for (int k = 1; k < 40; ++k)
+        for (const auto& d : {std::array<int, 3>{k, k, 0}, {0, k, -k}, {-k, 0, k}, {k, -k, k}})
+          for (int i = 0; i < 3; ++i) ends.push_back(sensor[i] + float(d[i] * res));
+      const std::size_t rays = ends.size() / 3;
+
+      // The expected stretches: maximal runs of one ray's consecutive cells in one 4×4×4 block.
+      std::vector<Stretch> expected;
+      std::uint64_t cells = 0;
+      for (std::size_t r = 0; r < rays; ++r) {
+        const std::vector<Key> walk = ourRay(grid, sensor, &ends[3 * r]);
+        cells += walk.size();
+        for (std::size_t i = 0; i < walk.size(); ++i) {
+          const std::uint32_t u[3] = {tree_coord::fromKey(walk[i].x), tree_coord::fromKey(walk[i].y),
+                                      tree_coord::fromKey(walk[i].z)};
+          const std::uint64_t bit = std::uint64_t(1) << (8 * tree_coord::octant(u[0], u[1], u[2], 2) +
+                                                         tree_coord::octant(u[0], u[1], u[2], 1));
+          const Stretch s{u[0] >> 2, u[1] >> 2, u[2] >> 2, bit};
+          if (i > 0 && std::equal(s.begin(), s.begin() + 3, expected.back().begin()))
+            expected.back()[3] |= bit;
+          else
+            expected.push_back(s);
         }
-        expected.emplace_back(k, bit);
       }
-      std::vector<std::pair<Key, std::uint32_t>> groups;
-      const std::size_t n = traceSegmentLeaves(
-          grid, o, e, [&](const Key& k, std::uint32_t mask) { groups.emplace_back(k, mask); });
-      EXPECT_EQ(n, cells.size());
-      ASSERT_EQ(groups.size(), expected.size()) << "ray " << r << " at " << res << " m";
-      for (std::size_t i = 0; i < groups.size(); ++i) {
-        EXPECT_EQ(groups[i].first, expected[i].first);
-        EXPECT_EQ(groups[i].second, expected[i].second);
+      std::sort(expected.begin(), expected.end());
+
+      for (BlockRayWalker::Lanes lanes : {BlockRayWalker::Lanes::Best, BlockRayWalker::Lanes::Scalar}) {
+        BlockRayWalker walker(grid, sensor, ends.data(), rays, lanes);
+        std::vector<Stretch> got;
+        while (const std::size_t n = walker.next())
+          for (std::size_t i = 0; i < n; ++i)
+            got.push_back({walker.blockX(i), walker.blockY(i), walker.blockZ(i), walker.cells(i)});
+        EXPECT_EQ(walker.cellCount(), cells);
+        std::sort(got.begin(), got.end());
+        EXPECT_TRUE(got == expected) << (lanes == BlockRayWalker::Lanes::Best ? "vector lanes"
+                                                                              : "one ray at a time")
+                                     << " at " << res << " m: " << got.size() << " stretches, expected "
+                                     << expected.size();
       }
     }
   }

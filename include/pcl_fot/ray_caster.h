@@ -12,41 +12,56 @@ namespace pcl {
 namespace fot {
 
 /**
- * The 3D DDA of Amanatides & Woo over cell keys, shared by the tree and the dense grid.
+ * Where a DDA walk starts, per axis: the step (-1, 0 or 1), the distance along the ray at which it first
+ * crosses a cell border, and the distance between crossings. Its arithmetic is OctoMap's (computeRayKeys):
+ * double distances measured from the cell centre plus a float half cell, for a float direction normalised
+ * by a float length.
  *
- * Its arithmetic is OctoMap's (computeRayKeys): a float direction normalised by a float length, double
- * crossing distances measured from the cell centre plus a float half cell, and ties between axes broken
- * towards y, then z. So for the same grid and endpoints both visit exactly the same cells. Coordinates
- * are relative to the grid origin.
+ * `start` is a cell the ray passes, distances are measured from `origin`, and `direction` is a unit vector.
+ * With float coordinates the arithmetic is OctoMap's to the bit (its half cell is a float); with double
+ * coordinates it is as exact as doubles allow, for callers that need no OctoMap parity.
+ */
+struct DdaStart {
+  int step[3];
+  double tmax[3];
+  double tdelta[3];
+};
+
+template <typename Scalar>
+DdaStart ddaStart(const VoxelGrid& grid, const Key& start, const Scalar origin[3],
+                  const Scalar direction[3]) {
+  const double res = grid.resolution();
+  const std::int32_t key[3] = {start.x, start.y, start.z};
+  DdaStart s;
+  for (int i = 0; i < 3; ++i) {
+    s.step[i] = direction[i] > Scalar(0) ? 1 : (direction[i] < Scalar(0) ? -1 : 0);
+    if (s.step[i] != 0) {
+      const double border = (double(key[i]) + 0.5) * res + double(Scalar(s.step[i] * res * 0.5));
+      s.tmax[i] = (border - double(origin[i])) / double(direction[i]);
+      s.tdelta[i] = res / std::fabs(double(direction[i]));
+    } else {
+      s.tmax[i] = std::numeric_limits<double>::max();
+      s.tdelta[i] = std::numeric_limits<double>::max();
+    }
+  }
+  return s;
+}
+
+/**
+ * The 3D DDA of Amanatides & Woo over cell keys, shared by the tree and the dense grid. Ties between axes
+ * break towards y, then z, as in OctoMap, so for the same grid and endpoints both visit exactly the same
+ * cells. Coordinates are relative to the grid origin.
  */
 class RayWalker {
  public:
-  /**
-   * Starts in cell `start`, a cell the ray passes, measuring distances from `origin`; `direction` is a
-   * unit vector. With float coordinates the arithmetic is OctoMap's to the bit (its half cell is a float);
-   * with double coordinates it is as exact as doubles allow, for callers that need no OctoMap parity.
-   */
+  /** Starts in cell `start`; see DdaStart for the arguments. */
   template <typename Scalar>
   RayWalker(const VoxelGrid& grid, const Key& start, const Scalar origin[3], const Scalar direction[3])
       : k0_(start.x), k1_(start.y), k2_(start.z) {
-    const double res = grid.resolution();
-    const std::int32_t key[3] = {start.x, start.y, start.z};
-    int step[3];
-    double tmax[3], tdelta[3];
-    for (int i = 0; i < 3; ++i) {
-      step[i] = direction[i] > Scalar(0) ? 1 : (direction[i] < Scalar(0) ? -1 : 0);
-      if (step[i] != 0) {
-        const double border = (double(key[i]) + 0.5) * res + double(Scalar(step[i] * res * 0.5));
-        tmax[i] = (border - double(origin[i])) / double(direction[i]);
-        tdelta[i] = res / std::fabs(double(direction[i]));
-      } else {
-        tmax[i] = std::numeric_limits<double>::max();
-        tdelta[i] = std::numeric_limits<double>::max();
-      }
-    }
-    s0_ = step[0], s1_ = step[1], s2_ = step[2];
-    t0_ = tmax[0], t1_ = tmax[1], t2_ = tmax[2];
-    d0_ = tdelta[0], d1_ = tdelta[1], d2_ = tdelta[2];
+    const DdaStart s = ddaStart(grid, start, origin, direction);
+    s0_ = s.step[0], s1_ = s.step[1], s2_ = s.step[2];
+    t0_ = s.tmax[0], t1_ = s.tmax[1], t2_ = s.tmax[2];
+    d0_ = s.tdelta[0], d1_ = s.tdelta[1], d2_ = s.tdelta[2];
   }
 
   Key key() const { return Key{k0_, k1_, k2_}; }
@@ -137,32 +152,6 @@ std::size_t traceSegment(const VoxelGrid& grid, const float origin[3], const flo
     ++total;
   }
   return total;
-}
-
-/**
- * traceSegment with the cells grouped by the tree's 2×2×2 leaves: `visit_leaf(const Key& cell, uint32_t
- * mask)` gets, for each stretch of the ray inside one leaf, its first cell and the octant bits of the cells
- * it passes there. The grouping lives in the walk's own loop, where its state stays in registers.
- */
-template <typename LeafVisitor>
-std::size_t traceSegmentLeaves(const VoxelGrid& grid, const float origin[3], const float end[3],
-                               LeafVisitor&& visit_leaf) {
-  Key first;
-  std::uint32_t leaf[3] = {0, 0, 0}, mask = 0;
-  const std::size_t cells = traceSegment(grid, origin, end, [&](const Key& k) {
-    const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z)};
-    const std::uint32_t bit = 1u << tree_coord::octant(u[0], u[1], u[2], 1);
-    if (mask != 0 && (((u[0] ^ leaf[0]) | (u[1] ^ leaf[1]) | (u[2] ^ leaf[2])) >> 1) == 0) {
-      mask |= bit;
-      return;
-    }
-    if (mask != 0) visit_leaf(static_cast<const Key&>(first), mask);
-    first = k;
-    leaf[0] = u[0], leaf[1] = u[1], leaf[2] = u[2];
-    mask = bit;
-  });
-  if (mask != 0) visit_leaf(static_cast<const Key&>(first), mask);
-  return cells;
 }
 
 }  // namespace fot
