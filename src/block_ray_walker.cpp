@@ -1,7 +1,7 @@
 #include "block_ray_walker.h"
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define PCL_FOT_AVX2_PATH 1
+#define PCL_FOT_X86_LANES 1
 #include <immintrin.h>
 #endif
 
@@ -10,12 +10,7 @@ namespace fot {
 namespace detail {
 namespace {
 
-/** Bit of the cell at tree coordinates u in its 4×4×4 block: 8 × leaf octant + cell octant. */
-inline unsigned blockBit(const std::uint32_t u[3]) {
-  return 8 * tree_coord::octant(u[0], u[1], u[2], 2) + tree_coord::octant(u[0], u[1], u[2], 1);
-}
-
-#ifdef PCL_FOT_AVX2_PATH
+#ifdef PCL_FOT_X86_LANES
 /** For each 4-bit lane mask, the vpermd indices that move the selected 64-bit lanes to the front. */
 struct PackTable {
   alignas(32) std::int32_t index[16][8];
@@ -35,13 +30,21 @@ struct PackTable {
 };
 constexpr PackTable kPack;
 
-__attribute__((target("avx2"), always_inline)) inline __m256i load(const std::int64_t* p) {
+#define PCL_FOT_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+PCL_FOT_AVX2 __m256i load(const std::int64_t* p) {
   return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
 }
-__attribute__((target("avx2"), always_inline)) inline void store(std::int64_t* p, __m256i v) {
+PCL_FOT_AVX2 __m256i load(const std::uint64_t* p) {
+  return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+}
+PCL_FOT_AVX2 void store(std::int64_t* p, __m256i v) {
   _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
 }
-__attribute__((target("avx2"), always_inline)) inline void storeu(std::uint64_t* p, __m256i v) {
+PCL_FOT_AVX2 void store(std::uint64_t* p, __m256i v) {
+  _mm256_store_si256(reinterpret_cast<__m256i*>(p), v);
+}
+PCL_FOT_AVX2 void storeu(std::uint64_t* p, __m256i v) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v);
 }
 #endif
@@ -50,53 +53,56 @@ __attribute__((target("avx2"), always_inline)) inline void storeu(std::uint64_t*
 
 BlockRayWalker::BlockRayWalker(const VoxelGrid& grid, const float sensor[3], const float* ends,
                                std::size_t count, Lanes lanes)
-    : grid_(grid), sensor_(sensor), ends_(ends), count_(count) {
-#ifdef PCL_FOT_AVX2_PATH
-  avx2_ = lanes == Lanes::Best && __builtin_cpu_supports("avx2");
+    : grid_(grid), sensor_(sensor), ends_(ends), count_(count), path_(Path::Scalar) {
+#ifdef PCL_FOT_X86_LANES
+  const bool avx2 = lanes != Lanes::Scalar && __builtin_cpu_supports("avx2");
+  const bool avx512 =
+      lanes == Lanes::Best && avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  path_ = avx512 ? Path::Avx512 : (avx2 ? Path::Avx2 : Path::Scalar);
 #else
-  avx2_ = false;
   (void)lanes;
 #endif
   if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], from_)) count_ = 0;  // no ray can start
   for (auto& o : out_) o.resize(kCapacity);
 }
 
-std::uint64_t BlockRayWalker::cellCount() const {
-  std::uint64_t n = started_cells_ + scalar_cells_;
-  for (int l = 0; l < kLanes; ++l) n -= std::uint64_t(walked_[l]);
-  return n;
-}
-
 std::size_t BlockRayWalker::next() {
-  return avx2_ ? nextAvx2() : nextScalar();
+  switch (path_) {
+    case Path::Avx512:
+      return nextAvx512();
+    case Path::Avx2:
+      return nextAvx2();
+    default:
+      return nextScalar();
+  }
 }
 
-void BlockRayWalker::emit(std::size_t& n, std::uint64_t bx, std::uint64_t by, std::uint64_t bz,
+void BlockRayWalker::emit(std::size_t& n, std::uint64_t x, std::uint64_t y, std::uint64_t z,
                           std::uint64_t cells) {
   if (n == out_[0].size())
     for (auto& o : out_) o.resize(2 * o.size());
-  out_[0][n] = bx, out_[1][n] = by, out_[2][n] = bz, out_[3][n] = cells;
+  out_[0][n] = x, out_[1][n] = y, out_[2][n] = z, out_[3][n] = cells;
   ++n;
 }
 
 std::size_t BlockRayWalker::nextScalar() {
   std::size_t n = 0;
   while (n < kBatch && next_ray_ < count_) {
-    std::uint32_t block[3] = {0, 0, 0};
+    std::uint32_t last[3] = {0, 0, 0};
     std::uint64_t mask = 0;
-    scalar_cells_ += traceSegment(grid_, sensor_, ends_ + 3 * next_ray_++, [&](const Key& k) {
+    cells_ += traceSegment(grid_, sensor_, ends_ + 3 * next_ray_++, [&](const Key& k) {
       const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y),
                                   tree_coord::fromKey(k.z)};
-      const std::uint64_t bit = std::uint64_t(1) << blockBit(u);
-      if (mask != 0 && (u[0] >> 2) == block[0] && (u[1] >> 2) == block[1] && (u[2] >> 2) == block[2]) {
+      const std::uint64_t bit = std::uint64_t(1) << block_cells::bit(u[0] & 3u, u[1] & 3u, u[2] & 3u);
+      if (mask != 0 && ((u[0] ^ last[0]) | (u[1] ^ last[1]) | (u[2] ^ last[2])) < 4) {
         mask |= bit;
-        return;
+      } else {
+        if (mask != 0) emit(n, last[0], last[1], last[2], mask);
+        mask = bit;
       }
-      if (mask != 0) emit(n, block[0], block[1], block[2], mask);
-      block[0] = u[0] >> 2, block[1] = u[1] >> 2, block[2] = u[2] >> 2;
-      mask = bit;
+      std::copy(u, u + 3, last);
     });
-    if (mask != 0) emit(n, block[0], block[1], block[2], mask);
+    if (mask != 0) emit(n, last[0], last[1], last[2], mask);
   }
   return n;
 }
@@ -119,110 +125,168 @@ bool BlockRayWalker::startRay(int lane) {
       step_[i][lane] = s.step[i];
       tmax_[i][lane] = s.tmax[i];
       tdelta_[i][lane] = s.tdelta[i];
-      block_[i][lane] = u[i] >> 2;
       span += std::abs(std::int64_t(to_key[i]) - from_key[i]);
     }
     length_[lane] = ray.length;
-    left_[lane] = span;
-    mask_[lane] = std::uint64_t(1) << blockBit(u);
+    left_[lane] = span_[lane] = span;
+    mask_[lane] = std::uint64_t(1) << block_cells::bit(u[0] & 3u, u[1] & 3u, u[2] & 3u);
     live_[lane] = -1;
-    ++started_cells_;
     return true;
   }
   return false;
 }
 
-#ifdef PCL_FOT_AVX2_PATH
-/**
- * traceSegment's loop, four rays at a time: the same compares, additions and stopping rules per lane, as
- * vector operations. A lane whose ray ends hands out its last stretch and takes the next ray.
- */
-__attribute__((target("avx2"))) std::size_t BlockRayWalker::nextAvx2() {
-  for (int l = 0; l < kLanes; ++l)
-    if (!live_[l]) startRay(l);
-  const __m256i one = _mm256_set1_epi64x(1), two = _mm256_set1_epi64x(2), minus3 = _mm256_set1_epi64x(-3);
+void BlockRayWalker::finishStep(int l, bool beyond, bool crossed, std::size_t& n) {
+  // traceSegment's stops: at the end cell, a few steps past it, or beyond the ray's length.
+  const bool at = u_[0][l] == end_[0][l] && u_[1][l] == end_[1][l] && u_[2][l] == end_[2][l];
+  const bool done = beyond || (left_[l] <= 0 && (at || left_[l] < -3));
+  if (done || crossed) {
+    emit(n, std::uint64_t(prev_[0][l]), std::uint64_t(prev_[1][l]), std::uint64_t(prev_[2][l]), mask_[l]);
+    mask_[l] = 0;
+  }
+  if (!done) {
+    mask_[l] |= bit_[l];
+    return;
+  }
+  cells_ += std::uint64_t(span_[l] - left_[l]);  // every step but the last visited a cell
+  startRay(l);
+}
 
+#ifdef PCL_FOT_X86_LANES
+namespace {
+
+/** Four lanes' state in registers, loaded from and stored to BlockRayWalker's arrays at lane `base`. */
+struct Lanes4 {
+  __m256i u0, u1, u2, left, mask;
+  __m256d t0, t1, t2;
+};
+
+/** What a step leaves for finishStep, in the lanes the vector test flagged. */
+struct Flagged {
+  int lanes, beyond, crossed;
+  __m256i p0, p1, p2, bit;
+};
+
+/**
+ * One step of traceSegment's loop in four lanes: the same compares, additions and stopping rules per
+ * lane, as vector operations. A lane can only be at its end cell once `left` reaches zero, so the vector
+ * test is just that and the length; finishStep settles those steps one lane at a time. Stretches of
+ * lanes entering another block go to out[0..3] at n.
+ */
+template <std::size_t L>
+PCL_FOT_AVX2 Flagged step4(Lanes4& g, const std::int64_t (&step)[3][L], const double (&tdelta)[3][L],
+                           const double* length, const std::int64_t* live, int base,
+                           std::uint64_t* const out[4], std::size_t& n) {
+  const __m256i one = _mm256_set1_epi64x(1), three = _mm256_set1_epi64x(3);
+  // RayWalker::step: x only if its crossing comes strictly first, ties to y, then z.
+  const __m256d c01 = _mm256_cmp_pd(g.t0, g.t1, _CMP_LT_OQ), c02 = _mm256_cmp_pd(g.t0, g.t2, _CMP_LT_OQ),
+                c12 = _mm256_cmp_pd(g.t1, g.t2, _CMP_LT_OQ);
+  const __m256d mx = _mm256_and_pd(c01, c02), my = _mm256_andnot_pd(c01, c12), mxy = _mm256_or_pd(mx, my);
+  g.t0 = _mm256_add_pd(g.t0, _mm256_and_pd(mx, _mm256_load_pd(tdelta[0] + base)));
+  g.t1 = _mm256_add_pd(g.t1, _mm256_and_pd(my, _mm256_load_pd(tdelta[1] + base)));
+  g.t2 = _mm256_add_pd(g.t2, _mm256_andnot_pd(mxy, _mm256_load_pd(tdelta[2] + base)));
+  Flagged f;
+  f.p0 = g.u0, f.p1 = g.u1, f.p2 = g.u2;
+  g.u0 = _mm256_add_epi64(g.u0, _mm256_and_si256(_mm256_castpd_si256(mx), load(step[0] + base)));
+  g.u1 = _mm256_add_epi64(g.u1, _mm256_and_si256(_mm256_castpd_si256(my), load(step[1] + base)));
+  g.u2 = _mm256_add_epi64(g.u2, _mm256_andnot_si256(_mm256_castpd_si256(mxy), load(step[2] + base)));
+  g.left = _mm256_sub_epi64(g.left, one);
+  const __m256d exit = _mm256_min_pd(_mm256_min_pd(g.t0, g.t1), g.t2);
+  const __m256i beyond = _mm256_castpd_si256(_mm256_cmp_pd(exit, _mm256_load_pd(length + base), _CMP_GT_OQ));
+  const __m256i lanes = load(live + base);
+  const __m256i flagged = _mm256_and_si256(lanes, _mm256_or_si256(beyond, _mm256_cmpgt_epi64(one, g.left)));
+  // The cell's bit, and whether the step entered another block: a coordinate changed above its low bits.
+  f.bit = _mm256_sllv_epi64(
+      one, _mm256_or_si256(_mm256_and_si256(g.u0, three),
+                           _mm256_or_si256(_mm256_slli_epi64(_mm256_and_si256(g.u1, three), 2),
+                                           _mm256_slli_epi64(_mm256_and_si256(g.u2, three), 4))));
+  const __m256i moved =
+      _mm256_or_si256(_mm256_xor_si256(g.u0, f.p0),
+                      _mm256_or_si256(_mm256_xor_si256(g.u1, f.p1), _mm256_xor_si256(g.u2, f.p2)));
+  const __m256i crossed = _mm256_cmpgt_epi64(moved, three);
+  const __m256i walking = _mm256_andnot_si256(flagged, lanes);
+  const __m256i emit = _mm256_and_si256(crossed, walking);
+  const int m = _mm256_movemask_pd(_mm256_castsi256_pd(emit));
+  const __m256i pack = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.index[m]));
+  storeu(out[0] + n, _mm256_permutevar8x32_epi32(f.p0, pack));
+  storeu(out[1] + n, _mm256_permutevar8x32_epi32(f.p1, pack));
+  storeu(out[2] + n, _mm256_permutevar8x32_epi32(f.p2, pack));
+  storeu(out[3] + n, _mm256_permutevar8x32_epi32(g.mask, pack));
+  n += std::size_t(kPack.count[m]);
+  const __m256i next = _mm256_blendv_epi8(_mm256_or_si256(g.mask, f.bit), f.bit, emit);
+  g.mask = _mm256_blendv_epi8(g.mask, next, walking);
+  f.lanes = _mm256_movemask_pd(_mm256_castsi256_pd(flagged));
+  f.beyond = _mm256_movemask_pd(_mm256_castsi256_pd(beyond));
+  f.crossed = _mm256_movemask_pd(_mm256_castsi256_pd(crossed));
+  return f;
+}
+
+}  // namespace
+
+/**
+ * Walks Groups × 4 lanes, each group's step independent of the others', until a batch is ready or a
+ * lane is flagged. One group's step is a chain of dependent operations; two groups fill the pipeline,
+ * where there are registers enough for both (AVX-512VL's 32).
+ */
+template <int Groups>
+PCL_FOT_AVX2 std::size_t BlockRayWalker::walkGroups() {
+  for (int l = 0; l < 4 * Groups; ++l)
+    if (!live_[l]) startRay(l);
+  std::uint64_t* const out[4] = {out_[0].data(), out_[1].data(), out_[2].data(), out_[3].data()};
   std::size_t n = 0;
-  for (;;) {
-    if (!(live_[0] | live_[1] | live_[2] | live_[3])) break;
-    __m256i u0 = load(u_[0]), u1 = load(u_[1]), u2 = load(u_[2]);
-    const __m256i s0 = load(step_[0]), s1 = load(step_[1]), s2 = load(step_[2]);
-    const __m256i e0 = load(end_[0]), e1 = load(end_[1]), e2 = load(end_[2]);
-    __m256d t0 = _mm256_load_pd(tmax_[0]), t1 = _mm256_load_pd(tmax_[1]), t2 = _mm256_load_pd(tmax_[2]);
-    const __m256d d0 = _mm256_load_pd(tdelta_[0]), d1 = _mm256_load_pd(tdelta_[1]),
-                  d2 = _mm256_load_pd(tdelta_[2]);
-    const __m256d length = _mm256_load_pd(length_);
-    const __m256i live = load(live_);
-    __m256i left = load(left_), b0 = load(block_[0]), b1 = load(block_[1]), b2 = load(block_[2]);
-    __m256i mask = load(reinterpret_cast<const std::int64_t*>(mask_)), walked = load(walked_);
-    int done_lanes = 0;
-    while (n < kBatch) {
-      // RayWalker::step: x only if its crossing comes strictly first, ties to y, then z.
-      const __m256d c01 = _mm256_cmp_pd(t0, t1, _CMP_LT_OQ), c02 = _mm256_cmp_pd(t0, t2, _CMP_LT_OQ),
-                    c12 = _mm256_cmp_pd(t1, t2, _CMP_LT_OQ);
-      const __m256d mx = _mm256_and_pd(c01, c02), my = _mm256_andnot_pd(c01, c12);
-      const __m256d mz = _mm256_andnot_pd(_mm256_or_pd(mx, my), _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
-      t0 = _mm256_add_pd(t0, _mm256_and_pd(mx, d0));
-      t1 = _mm256_add_pd(t1, _mm256_and_pd(my, d1));
-      t2 = _mm256_add_pd(t2, _mm256_and_pd(mz, d2));
-      u0 = _mm256_add_epi64(u0, _mm256_and_si256(_mm256_castpd_si256(mx), s0));
-      u1 = _mm256_add_epi64(u1, _mm256_and_si256(_mm256_castpd_si256(my), s1));
-      u2 = _mm256_add_epi64(u2, _mm256_and_si256(_mm256_castpd_si256(mz), s2));
-      left = _mm256_sub_epi64(left, one);
-      // traceSegment's stops: at the end cell, a few steps past it, or beyond the ray's length.
-      const __m256i at =
-          _mm256_and_si256(_mm256_cmpeq_epi64(u0, e0),
-                           _mm256_and_si256(_mm256_cmpeq_epi64(u1, e1), _mm256_cmpeq_epi64(u2, e2)));
-      const __m256d exit = _mm256_min_pd(_mm256_min_pd(t0, t1), t2);
-      const __m256i beyond = _mm256_castpd_si256(_mm256_cmp_pd(exit, length, _CMP_GT_OQ));
-      const __m256i done = _mm256_and_si256(
-          live, _mm256_or_si256(at, _mm256_or_si256(_mm256_cmpgt_epi64(minus3, left), beyond)));
-      const __m256i visit = _mm256_andnot_si256(done, live);
-      // The cell's block and bit; a lane entering another block hands out its stretch.
-      const __m256i n0 = _mm256_srli_epi64(u0, 2), n1 = _mm256_srli_epi64(u1, 2),
-                    n2 = _mm256_srli_epi64(u2, 2);
-      const __m256i same =
-          _mm256_and_si256(_mm256_cmpeq_epi64(n0, b0),
-                           _mm256_and_si256(_mm256_cmpeq_epi64(n1, b1), _mm256_cmpeq_epi64(n2, b2)));
-      const __m256i emit = _mm256_andnot_si256(same, visit);
-      const __m256i lo = _mm256_or_si256(_mm256_and_si256(u0, one),
-                                         _mm256_or_si256(_mm256_slli_epi64(_mm256_and_si256(u1, one), 1),
-                                                         _mm256_slli_epi64(_mm256_and_si256(u2, one), 2)));
-      const __m256i hi = _mm256_or_si256(_mm256_slli_epi64(_mm256_and_si256(u0, two), 2),
-                                         _mm256_or_si256(_mm256_slli_epi64(_mm256_and_si256(u1, two), 3),
-                                                         _mm256_slli_epi64(_mm256_and_si256(u2, two), 4)));
-      const __m256i bit = _mm256_sllv_epi64(one, _mm256_or_si256(lo, hi));
-      const int m = _mm256_movemask_pd(_mm256_castsi256_pd(emit));
-      const __m256i pack = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.index[m]));
-      storeu(out_[0].data() + n, _mm256_permutevar8x32_epi32(b0, pack));
-      storeu(out_[1].data() + n, _mm256_permutevar8x32_epi32(b1, pack));
-      storeu(out_[2].data() + n, _mm256_permutevar8x32_epi32(b2, pack));
-      storeu(out_[3].data() + n, _mm256_permutevar8x32_epi32(mask, pack));
-      n += std::size_t(kPack.count[m]);
-      b0 = _mm256_blendv_epi8(b0, n0, emit);
-      b1 = _mm256_blendv_epi8(b1, n1, emit);
-      b2 = _mm256_blendv_epi8(b2, n2, emit);
-      mask = _mm256_blendv_epi8(_mm256_or_si256(mask, _mm256_and_si256(bit, visit)), bit, emit);
-      walked = _mm256_add_epi64(walked, visit);
-      done_lanes = _mm256_movemask_pd(_mm256_castsi256_pd(done));
-      if (done_lanes != 0) break;
+  bool any = false;
+  for (int l = 0; l < 4 * Groups; ++l) any |= live_[l] != 0;
+  while (n < kBatch && any) {
+    Lanes4 g[Groups];
+    for (int k = 0; k < Groups; ++k) {
+      const int b = 4 * k;
+      g[k] = Lanes4{load(u_[0] + b),
+                    load(u_[1] + b),
+                    load(u_[2] + b),
+                    load(left_ + b),
+                    load(mask_ + b),
+                    _mm256_load_pd(tmax_[0] + b),
+                    _mm256_load_pd(tmax_[1] + b),
+                    _mm256_load_pd(tmax_[2] + b)};
     }
-    store(u_[0], u0), store(u_[1], u1), store(u_[2], u2);
-    _mm256_store_pd(tmax_[0], t0), _mm256_store_pd(tmax_[1], t1), _mm256_store_pd(tmax_[2], t2);
-    store(left_, left), store(block_[0], b0), store(block_[1], b1), store(block_[2], b2);
-    store(reinterpret_cast<std::int64_t*>(mask_), mask), store(walked_, walked);
-    for (int l = 0; l < kLanes; ++l)
-      if (done_lanes >> l & 1) {
-        emit(n, std::uint64_t(block_[0][l]), std::uint64_t(block_[1][l]), std::uint64_t(block_[2][l]),
-             mask_[l]);
-        startRay(l);
+    Flagged f[Groups];
+    int flagged = 0;
+    do {
+      for (int k = 0; k < Groups; ++k) {
+        f[k] = step4(g[k], step_, tdelta_, length_, live_, 4 * k, out, n);
+        flagged |= f[k].lanes;
       }
-    if (n >= kBatch) break;
+    } while (flagged == 0 && n < kBatch);
+    for (int k = 0; k < Groups; ++k) {
+      const int b = 4 * k;
+      store(u_[0] + b, g[k].u0), store(u_[1] + b, g[k].u1), store(u_[2] + b, g[k].u2);
+      store(left_ + b, g[k].left), store(mask_ + b, g[k].mask);
+      _mm256_store_pd(tmax_[0] + b, g[k].t0), _mm256_store_pd(tmax_[1] + b, g[k].t1);
+      _mm256_store_pd(tmax_[2] + b, g[k].t2);
+      if (f[k].lanes == 0) continue;
+      store(prev_[0] + b, f[k].p0), store(prev_[1] + b, f[k].p1), store(prev_[2] + b, f[k].p2);
+      store(bit_ + b, f[k].bit);
+      for (int l = 0; l < 4; ++l)
+        if (f[k].lanes >> l & 1) finishStep(b + l, f[k].beyond >> l & 1, f[k].crossed >> l & 1, n);
+    }
+    any = false;
+    for (int l = 0; l < 4 * Groups; ++l) any |= live_[l] != 0;
   }
   return n;
 }
+
+__attribute__((target("avx2"))) std::size_t BlockRayWalker::nextAvx2() {
+  return walkGroups<1>();
+}
+
+__attribute__((target("avx2,avx512f,avx512vl"))) std::size_t BlockRayWalker::nextAvx512() {
+  return walkGroups<2>();
+}
 #else
 std::size_t BlockRayWalker::nextAvx2() {
+  return nextScalar();
+}
+std::size_t BlockRayWalker::nextAvx512() {
   return nextScalar();
 }
 #endif

@@ -18,10 +18,9 @@ template <typename Visit>
 void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& visit) {
   const std::uint32_t block[3] = {walker.blockX(i), walker.blockY(i), walker.blockZ(i)};
   for (std::uint64_t cells = walker.cells(i); cells != 0; cells &= cells - 1) {
-    const unsigned bit = unsigned(__builtin_ctzll(cells)), leaf = bit / 8, cell = bit % 8;
-    visit(Key{tree_coord::toKey(4 * block[0] + 2 * (leaf & 1u) + (cell & 1u)),
-              tree_coord::toKey(4 * block[1] + (leaf & 2u) + (cell & 2u) / 2),
-              tree_coord::toKey(4 * block[2] + (leaf & 4u) / 2 + (cell & 4u) / 4)});
+    const unsigned bit = unsigned(__builtin_ctzll(cells));
+    visit(Key{tree_coord::toKey(4 * block[0] + (bit & 3u)), tree_coord::toKey(4 * block[1] + (bit >> 2 & 3u)),
+              tree_coord::toKey(4 * block[2] + (bit >> 4))});
   }
 }
 
@@ -45,12 +44,30 @@ class TreeWriter {
     written_.resize(std::size_t(1) << written_bits_);
   }
 
-  void freeStretch(const detail::BlockRayWalker& walker, std::size_t i) {
+  /** The walker's batch of `n` stretches. */
+  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
     if (!line_burst_) {
-      forEachCell(walker, i, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
+      for (std::size_t i = 0; i < n; ++i)
+        forEachCell(walker, i, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
       return;
     }
-    freeBlock({walker.blockX(i), walker.blockY(i), walker.blockZ(i)}, walker.cells(i));
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t block[3] = {walker.blockX(i), walker.blockY(i), walker.blockZ(i)};
+      const std::uint64_t cells = walker.cells(i);
+      if (skip_ != 0 &&
+          (((block[0] << 2) ^ cube_[0]) | ((block[1] << 2) ^ cube_[1]) | ((block[2] << 2) ^ cube_[2])) >>
+                  skip_ ==
+              0)
+        continue;
+      Written& w = entry(block);
+      if (w.block[0] != block[0] || w.block[1] != block[1] || w.block[2] != block[2]) {
+        replace(w, block, cells);
+        continue;
+      }
+      w.pending |= cells & ~w.cells;
+      w.cells |= cells;
+      if (w.cells == ~std::uint64_t(0)) flush(w);  // a whole free block: let the tree fold it now
+    }
   }
 
   /** Writes the cells still waiting in the table; the rays' free cells are all in the tree afterwards. */
@@ -64,30 +81,19 @@ class TreeWriter {
   /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
   struct Written {
     std::uint32_t block[3] = {0, 0, 0};  // tree coordinates / 4
-    std::uint64_t cells = 0;             // bit 8 * leaf + octant
+    std::uint64_t cells = 0;             // see detail::block_cells
     std::uint64_t pending = 0;           // the subset not written to the tree yet
   };
 
-  void freeBlock(const std::uint32_t (&block)[3], std::uint64_t cells) {
-    if (skip_ != 0 &&
-        (((block[0] << 2) ^ cube_[0]) | ((block[1] << 2) ^ cube_[1]) | ((block[2] << 2) ^ cube_[2])) >>
-                skip_ ==
-            0)
-      return;
-    Written& w = entry(block);
-    if (w.block[0] == block[0] && w.block[1] == block[1] && w.block[2] == block[2]) {
-      w.pending |= cells & ~w.cells;
-      w.cells |= cells;
-      if (w.cells == ~std::uint64_t(0)) flush(w);  // a whole free block: let the tree fold it now
-      return;
-    }
+  /** Takes a new block into its slot, whose block goes to the tree; off the hot path of blocks seen. */
+  __attribute__((noinline)) void replace(Written& w, const std::uint32_t (&block)[3], std::uint64_t cells) {
     flush(w);
     w.block[0] = block[0], w.block[1] = block[1], w.block[2] = block[2];
     w.cells = cells;
-    const unsigned leaf = unsigned(__builtin_ctzll(cells)) / 8;
-    w.pending = cells & ~(std::uint64_t(0xFF) << (8 * leaf));
+    const unsigned leaf = detail::block_cells::leafOf(unsigned(__builtin_ctzll(cells)));
+    w.pending = cells & ~detail::block_cells::leafBits(leaf);
     const unsigned skip = accessor_.setValidLeafCells(
-        leafKey(w.block, leaf), std::uint32_t(cells >> (8 * leaf)) & 0xFFu, CellState::Free);
+        leafKey(w.block, leaf), detail::block_cells::leafMask(cells, leaf), CellState::Free);
     if (skip < 2) return;  // the cube must hold whole blocks
     skip_ = skip;
     cube_[0] = block[0] << 2, cube_[1] = block[1] << 2, cube_[2] = block[2] << 2;
@@ -106,10 +112,10 @@ class TreeWriter {
 
   void flush(Written& w) {
     for (std::uint64_t p = w.pending; p != 0;) {
-      const unsigned leaf = unsigned(__builtin_ctzll(p)) / 8;
-      accessor_.setValidLeafCells(leafKey(w.block, leaf), std::uint32_t(p >> (8 * leaf)) & 0xFFu,
+      const unsigned leaf = detail::block_cells::leafOf(unsigned(__builtin_ctzll(p)));
+      accessor_.setValidLeafCells(leafKey(w.block, leaf), detail::block_cells::leafMask(p, leaf),
                                   CellState::Free);
-      p &= ~(std::uint64_t(0xFF) << (8 * leaf));
+      p &= ~detail::block_cells::leafBits(leaf);
     }
     w.pending = 0;
   }
@@ -125,10 +131,11 @@ class TreeWriter {
 class GridWriter {
  public:
   explicit GridWriter(FastOccMesh& g) : grid_(g) {}
-  void freeStretch(const detail::BlockRayWalker& walker, std::size_t i) {
-    forEachCell(walker, i, [&](const Key& k) {
-      if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
-    });
+  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i)
+      forEachCell(walker, i, [&](const Key& k) {
+        if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
+      });
   }
   void finishFree() {}
   void occupied(const Key& k) {
@@ -196,8 +203,7 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
     ++stats.rays;
   }
   detail::BlockRayWalker walker(grid, sensor, ends.data(), ends.size() / 3);
-  while (const std::size_t n = walker.next())
-    for (std::size_t i = 0; i < n; ++i) writer.freeStretch(walker, i);
+  while (const std::size_t n = walker.next()) writer.freeStretches(walker, n);
   writer.finishFree();
   stats.ray_cells = walker.cellCount();
   // Endpoints last: within a scan, occupied wins over free.

@@ -135,6 +135,23 @@ TEST(RayCaster, SegmentEndsExcludeTheEndCell) {
   EXPECT_EQ(traceSegment(grid, o, nan, [](const Key&) { ADD_FAILURE(); }), 0u);
 }
 
+TEST(BlockRayWalker, BlockCellsGatherEachLeafsCellsInOctantOrder) {
+  namespace bc = detail::block_cells;
+  for (unsigned x = 0; x < 4; ++x)
+    for (unsigned y = 0; y < 4; ++y)
+      for (unsigned z = 0; z < 4; ++z) {
+        const unsigned bit = bc::bit(x, y, z), leaf = tree_coord::octant(x, y, z, 2);
+        const std::uint64_t cell = std::uint64_t(1) << bit;
+        EXPECT_EQ(bc::leafOf(bit), leaf);
+        EXPECT_NE(bc::leafBits(leaf) & cell, 0u);
+        EXPECT_EQ(bc::leafMask(cell, leaf), 1u << tree_coord::octant(x, y, z, 1));
+        EXPECT_EQ(bc::leafMask(~cell, leaf), 0xFFu & ~(1u << tree_coord::octant(x, y, z, 1)));
+      }
+  std::uint64_t all = 0;
+  for (unsigned leaf = 0; leaf < 8; ++leaf) all += bc::leafBits(leaf);
+  EXPECT_EQ(all, ~std::uint64_t(0)) << "the leaves tile the block";
+}
+
 TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
   using detail::BlockRayWalker;
   using Stretch = std::array<std::uint64_t, 4>;  // block x, y, z and cells
@@ -169,8 +186,8 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
         for (std::size_t i = 0; i < walk.size(); ++i) {
           const std::uint32_t u[3] = {tree_coord::fromKey(walk[i].x), tree_coord::fromKey(walk[i].y),
                                       tree_coord::fromKey(walk[i].z)};
-          const std::uint64_t bit = std::uint64_t(1) << (8 * tree_coord::octant(u[0], u[1], u[2], 2) +
-                                                         tree_coord::octant(u[0], u[1], u[2], 1));
+          const std::uint64_t bit = std::uint64_t(1)
+                                    << detail::block_cells::bit(u[0] & 3u, u[1] & 3u, u[2] & 3u);
           const Stretch s{u[0] >> 2, u[1] >> 2, u[2] >> 2, bit};
           if (i > 0 && std::equal(s.begin(), s.begin() + 3, expected.back().begin()))
             expected.back()[3] |= bit;
@@ -180,7 +197,8 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
       }
       std::sort(expected.begin(), expected.end());
 
-      for (BlockRayWalker::Lanes lanes : {BlockRayWalker::Lanes::Best, BlockRayWalker::Lanes::Scalar}) {
+      for (BlockRayWalker::Lanes lanes :
+           {BlockRayWalker::Lanes::Best, BlockRayWalker::Lanes::Avx2, BlockRayWalker::Lanes::Scalar}) {
         BlockRayWalker walker(grid, sensor, ends.data(), rays, lanes);
         std::vector<Stretch> got;
         while (const std::size_t n = walker.next())
@@ -188,10 +206,8 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
             got.push_back({walker.blockX(i), walker.blockY(i), walker.blockZ(i), walker.cells(i)});
         EXPECT_EQ(walker.cellCount(), cells);
         std::sort(got.begin(), got.end());
-        EXPECT_TRUE(got == expected) << (lanes == BlockRayWalker::Lanes::Best ? "vector lanes"
-                                                                              : "one ray at a time")
-                                     << " at " << res << " m: " << got.size() << " stretches, expected "
-                                     << expected.size();
+        EXPECT_TRUE(got == expected) << "lanes " << int(lanes) << " at " << res << " m: " << got.size()
+                                     << " stretches, expected " << expected.size();
       }
     }
   }
