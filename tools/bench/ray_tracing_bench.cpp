@@ -105,7 +105,8 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
       "free are passed, and a table of the blocks written lately lets the next rays pass their cells too; "
       "the new cells of a block wait there and go into the tree a block at a time. \"FOT no LB\" makes "
       "every cell an access from the root. FOT, FOT no LB and GR share one ray walker (four or eight rays "
-      "at a time in AVX2 or AVX-512 lanes where the CPU has them), so their ratios compare the writes. The grid (GR) is "
+      "at a time in AVX2 or AVX-512 lanes where the CPU has them), so their ratios compare the writes. The "
+      "grid (GR) is "
       "FastOccMesh, 1024³ cells, 2 bits each once it holds free cells. OctoMap is `OcTree::insertPointCloud` "
       "(Debian's build, single-threaded), which produces the same free and occupied cells (checked by the "
       "tests). Cells written counts every cell on every ray plus the endpoints, as the paper's #w.\n\n",
