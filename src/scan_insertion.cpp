@@ -64,9 +64,12 @@ class TreeWriter {
         replace(w, block, cells);
         continue;
       }
-      w.pending |= cells & ~w.cells;
+      const std::uint64_t fresh = cells & ~w.cells;
+      w.pending |= fresh;
       w.cells |= cells;
-      if (w.cells == ~std::uint64_t(0)) flush(w);  // a whole free block: let the tree fold it now
+      // A block that just filled goes to the tree now, which folds it. Rays keep crossing full blocks, so
+      // one branch tests both conditions: it is rarely taken and easy to predict.
+      if ((~w.cells | std::uint64_t(fresh == 0)) == 0) flush(w);
     }
   }
 
