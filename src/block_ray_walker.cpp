@@ -1,5 +1,7 @@
 #include "block_ray_walker.h"
 
+#include <cstdlib>
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define PCL_FOT_X86_LANES 1
 #include <immintrin.h>
@@ -51,6 +53,15 @@ PCL_FOT_AVX2 void storeu(std::uint64_t* p, __m256i v) {
 
 }  // namespace
 
+namespace {
+// A word's bits per axis: the cell's two low bits in the block_cells bit, then 19 bits of its block.
+constexpr std::uint64_t kAxisBits[3] = {0x3u | std::uint64_t(0x7FFFF) << 6,
+                                        0xCu | std::uint64_t(0x7FFFF) << 25,
+                                        0x30u | std::uint64_t(0x7FFFF) << 44};
+// Fields count from 2^20 cells below the sensor's aligned cube: room for rays both ways.
+constexpr std::uint64_t kBias = std::uint64_t(1) << 20;
+}  // namespace
+
 BlockRayWalker::BlockRayWalker(const VoxelGrid& grid, const float sensor[3], const float* ends,
                                std::size_t count, Lanes lanes)
     : grid_(grid), sensor_(sensor), ends_(ends), count_(count), path_(Path::Scalar) {
@@ -63,7 +74,25 @@ BlockRayWalker::BlockRayWalker(const VoxelGrid& grid, const float sensor[3], con
   (void)lanes;
 #endif
   if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], from_)) count_ = 0;  // no ray can start
+  const std::uint32_t u[3] = {tree_coord::fromKey(from_.x), tree_coord::fromKey(from_.y),
+                              tree_coord::fromKey(from_.z)};
+  for (int a = 0; a < 3; ++a) {
+    origin_[a] = (u[a] & ~((std::uint32_t(1) << kAlign) - 1)) - std::uint32_t(kBias);
+    block_base_[a] = origin_[a] / 4;
+  }
+  start_ = word(u[0], u[1], u[2]);
   for (auto& o : out_) o.resize(kCapacity);
+}
+
+bool BlockRayWalker::reaches(const Key& from, const Key& to) {
+  return std::abs(std::int64_t(to.x) - from.x) <= kReach && std::abs(std::int64_t(to.y) - from.y) <= kReach &&
+         std::abs(std::int64_t(to.z) - from.z) <= kReach;
+}
+
+std::uint64_t BlockRayWalker::word(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+  const std::uint64_t f[3] = {x - origin_[0], y - origin_[1], z - origin_[2]};
+  return (f[0] & 3u) | (f[1] & 3u) << 2 | (f[2] & 3u) << 4 | (f[0] >> 2) << 6 | (f[1] >> 2) << 25 |
+         (f[2] >> 2) << 44;
 }
 
 std::size_t BlockRayWalker::next() {
@@ -77,32 +106,28 @@ std::size_t BlockRayWalker::next() {
   }
 }
 
-void BlockRayWalker::emit(std::size_t& n, std::uint64_t x, std::uint64_t y, std::uint64_t z,
-                          std::uint64_t cells) {
+void BlockRayWalker::emit(std::size_t& n, std::uint64_t cell, std::uint64_t cells) {
   if (n == out_[0].size())
     for (auto& o : out_) o.resize(2 * o.size());
-  out_[0][n] = x, out_[1][n] = y, out_[2][n] = z, out_[3][n] = cells;
+  out_[0][n] = cell, out_[1][n] = cells;
   ++n;
 }
 
 std::size_t BlockRayWalker::nextScalar() {
   std::size_t n = 0;
   while (n < kBatch && next_ray_ < count_) {
-    std::uint32_t last[3] = {0, 0, 0};
-    std::uint64_t mask = 0;
+    std::uint64_t last = 0, mask = 0;
     cells_ += traceSegment(grid_, sensor_, ends_ + 3 * next_ray_++, [&](const Key& k) {
-      const std::uint32_t u[3] = {tree_coord::fromKey(k.x), tree_coord::fromKey(k.y),
-                                  tree_coord::fromKey(k.z)};
-      const std::uint64_t bit = std::uint64_t(1) << block_cells::bit(u[0] & 3u, u[1] & 3u, u[2] & 3u);
-      if (mask != 0 && ((u[0] ^ last[0]) | (u[1] ^ last[1]) | (u[2] ^ last[2])) < 4) {
-        mask |= bit;
-      } else {
-        if (mask != 0) emit(n, last[0], last[1], last[2], mask);
-        mask = bit;
+      const std::uint64_t w =
+          word(tree_coord::fromKey(k.x), tree_coord::fromKey(k.y), tree_coord::fromKey(k.z));
+      if (mask != 0 && (w ^ last) >> 6 != 0) {
+        emit(n, last, mask);
+        mask = 0;
       }
-      std::copy(u, u + 3, last);
+      mask |= std::uint64_t(1) << (w & 63u);
+      last = w;
     });
-    if (mask != 0) emit(n, last[0], last[1], last[2], mask);
+    if (mask != 0) emit(n, last, mask);
   }
   return n;
 }
@@ -116,20 +141,21 @@ bool BlockRayWalker::startRay(int lane) {
     const RaySetup ray = setupRay(grid_, sensor_, end);
     const DdaStart s = ddaStart(grid_, from_, ray.origin, ray.direction);
     const std::int32_t from_key[3] = {from_.x, from_.y, from_.z}, to_key[3] = {to.x, to.y, to.z};
-    std::uint32_t u[3];
     std::int64_t span = 0;
-    for (int i = 0; i < 3; ++i) {
-      u[i] = tree_coord::fromKey(from_key[i]);
-      u_[i][lane] = u[i];
-      end_[i][lane] = tree_coord::fromKey(to_key[i]);
-      step_[i][lane] = s.step[i];
-      tmax_[i][lane] = s.tmax[i];
-      tdelta_[i][lane] = s.tdelta[i];
-      span += std::abs(std::int64_t(to_key[i]) - from_key[i]);
+    for (int a = 0; a < 3; ++a) {
+      // +1 is the axis's lowest bit; -1 all of its bits, with the carry running out of the top.
+      inc_[a][lane] = s.step[a] > 0 ? std::int64_t(kAxisBits[a] & (~kAxisBits[a] + 1))
+                                    : (s.step[a] < 0 ? std::int64_t(kAxisBits[a]) : 0);
+      tmax_[a][lane] = s.tmax[a];
+      tdelta_[a][lane] = s.tdelta[a];
+      span += std::abs(std::int64_t(to_key[a]) - from_key[a]);
     }
+    cell_[lane] = std::int64_t(start_);
+    end_[lane] =
+        std::int64_t(word(tree_coord::fromKey(to.x), tree_coord::fromKey(to.y), tree_coord::fromKey(to.z)));
     length_[lane] = ray.length;
     left_[lane] = span_[lane] = span;
-    mask_[lane] = std::uint64_t(1) << block_cells::bit(u[0] & 3u, u[1] & 3u, u[2] & 3u);
+    mask_[lane] = std::uint64_t(1) << (start_ & 63u);
     live_[lane] = -1;
     return true;
   }
@@ -138,10 +164,9 @@ bool BlockRayWalker::startRay(int lane) {
 
 void BlockRayWalker::finishStep(int l, bool beyond, bool crossed, std::size_t& n) {
   // traceSegment's stops: at the end cell, a few steps past it, or beyond the ray's length.
-  const bool at = u_[0][l] == end_[0][l] && u_[1][l] == end_[1][l] && u_[2][l] == end_[2][l];
-  const bool done = beyond || (left_[l] <= 0 && (at || left_[l] < -3));
+  const bool done = beyond || (left_[l] <= 0 && (cell_[l] == end_[l] || left_[l] < -3));
   if (done || crossed) {
-    emit(n, std::uint64_t(prev_[0][l]), std::uint64_t(prev_[1][l]), std::uint64_t(prev_[2][l]), mask_[l]);
+    emit(n, std::uint64_t(prev_[l]), mask_[l]);
     mask_[l] = 0;
   }
   if (!done) {
@@ -157,27 +182,27 @@ namespace {
 
 /** Four lanes' state in registers, loaded from and stored to BlockRayWalker's arrays at lane `base`. */
 struct Lanes4 {
-  __m256i u0, u1, u2, left, mask;
+  __m256i cell, left, mask;
   __m256d t0, t1, t2;
 };
 
 /** What a step leaves for finishStep, in the lanes the vector test flagged. */
 struct Flagged {
   int lanes, beyond, crossed;
-  __m256i p0, p1, p2, bit;
+  __m256i prev, bit;
 };
 
 /**
  * One step of traceSegment's loop in four lanes: the same compares, additions and stopping rules per
  * lane, as vector operations. A lane can only be at its end cell once `left` reaches zero, so the vector
  * test is just that and the length; finishStep settles those steps one lane at a time. Stretches of
- * lanes entering another block go to out[0..3] at n.
+ * lanes entering another block go to out[0..1] at n.
  */
 template <std::size_t L>
-PCL_FOT_AVX2 Flagged step4(Lanes4& g, const std::int64_t (&step)[3][L], const double (&tdelta)[3][L],
+PCL_FOT_AVX2 Flagged step4(Lanes4& g, const std::int64_t (&inc)[3][L], const double (&tdelta)[3][L],
                            const double* length, const std::int64_t* live, int base,
-                           std::uint64_t* const out[4], std::size_t& n) {
-  const __m256i one = _mm256_set1_epi64x(1), three = _mm256_set1_epi64x(3);
+                           std::uint64_t* const out[2], std::size_t& n) {
+  const __m256i one = _mm256_set1_epi64x(1), low = _mm256_set1_epi64x(63);
   // RayWalker::step: x only if its crossing comes strictly first, ties to y, then z.
   const __m256d c01 = _mm256_cmp_pd(g.t0, g.t1, _CMP_LT_OQ), c02 = _mm256_cmp_pd(g.t0, g.t2, _CMP_LT_OQ),
                 c12 = _mm256_cmp_pd(g.t1, g.t2, _CMP_LT_OQ);
@@ -185,33 +210,33 @@ PCL_FOT_AVX2 Flagged step4(Lanes4& g, const std::int64_t (&step)[3][L], const do
   g.t0 = _mm256_add_pd(g.t0, _mm256_and_pd(mx, _mm256_load_pd(tdelta[0] + base)));
   g.t1 = _mm256_add_pd(g.t1, _mm256_and_pd(my, _mm256_load_pd(tdelta[1] + base)));
   g.t2 = _mm256_add_pd(g.t2, _mm256_andnot_pd(mxy, _mm256_load_pd(tdelta[2] + base)));
+  // The step in the word: fill the other bits, add, and keep the stepping axis's bits of the sum.
+  const __m256i others = _mm256_castpd_si256(_mm256_blendv_pd(
+      _mm256_blendv_pd(_mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(~kAxisBits[2]))),
+                       _mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(~kAxisBits[1]))), my),
+      _mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(~kAxisBits[0]))), mx));
+  const __m256i add = _mm256_castpd_si256(
+      _mm256_blendv_pd(_mm256_blendv_pd(_mm256_load_pd(reinterpret_cast<const double*>(inc[2] + base)),
+                                        _mm256_load_pd(reinterpret_cast<const double*>(inc[1] + base)), my),
+                       _mm256_load_pd(reinterpret_cast<const double*>(inc[0] + base)), mx));
   Flagged f;
-  f.p0 = g.u0, f.p1 = g.u1, f.p2 = g.u2;
-  g.u0 = _mm256_add_epi64(g.u0, _mm256_and_si256(_mm256_castpd_si256(mx), load(step[0] + base)));
-  g.u1 = _mm256_add_epi64(g.u1, _mm256_and_si256(_mm256_castpd_si256(my), load(step[1] + base)));
-  g.u2 = _mm256_add_epi64(g.u2, _mm256_andnot_si256(_mm256_castpd_si256(mxy), load(step[2] + base)));
+  f.prev = g.cell;
+  const __m256i sum = _mm256_add_epi64(_mm256_or_si256(g.cell, others), add);
+  g.cell = _mm256_or_si256(_mm256_andnot_si256(others, sum), _mm256_and_si256(others, g.cell));
   g.left = _mm256_sub_epi64(g.left, one);
   const __m256d exit = _mm256_min_pd(_mm256_min_pd(g.t0, g.t1), g.t2);
   const __m256i beyond = _mm256_castpd_si256(_mm256_cmp_pd(exit, _mm256_load_pd(length + base), _CMP_GT_OQ));
   const __m256i lanes = load(live + base);
   const __m256i flagged = _mm256_and_si256(lanes, _mm256_or_si256(beyond, _mm256_cmpgt_epi64(one, g.left)));
-  // The cell's bit, and whether the step entered another block: a coordinate changed above its low bits.
-  f.bit = _mm256_sllv_epi64(
-      one, _mm256_or_si256(_mm256_and_si256(g.u0, three),
-                           _mm256_or_si256(_mm256_slli_epi64(_mm256_and_si256(g.u1, three), 2),
-                                           _mm256_slli_epi64(_mm256_and_si256(g.u2, three), 4))));
-  const __m256i moved =
-      _mm256_or_si256(_mm256_xor_si256(g.u0, f.p0),
-                      _mm256_or_si256(_mm256_xor_si256(g.u1, f.p1), _mm256_xor_si256(g.u2, f.p2)));
-  const __m256i crossed = _mm256_cmpgt_epi64(moved, three);
+  // The cell's bit, and whether the step entered another block: the word changed above its low bits.
+  f.bit = _mm256_sllv_epi64(one, _mm256_and_si256(g.cell, low));
+  const __m256i crossed = _mm256_cmpgt_epi64(_mm256_xor_si256(g.cell, f.prev), low);
   const __m256i walking = _mm256_andnot_si256(flagged, lanes);
   const __m256i emit = _mm256_and_si256(crossed, walking);
   const int m = _mm256_movemask_pd(_mm256_castsi256_pd(emit));
   const __m256i pack = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.index[m]));
-  storeu(out[0] + n, _mm256_permutevar8x32_epi32(f.p0, pack));
-  storeu(out[1] + n, _mm256_permutevar8x32_epi32(f.p1, pack));
-  storeu(out[2] + n, _mm256_permutevar8x32_epi32(f.p2, pack));
-  storeu(out[3] + n, _mm256_permutevar8x32_epi32(g.mask, pack));
+  storeu(out[0] + n, _mm256_permutevar8x32_epi32(f.prev, pack));
+  storeu(out[1] + n, _mm256_permutevar8x32_epi32(g.mask, pack));
   n += std::size_t(kPack.count[m]);
   const __m256i next = _mm256_blendv_epi8(_mm256_or_si256(g.mask, f.bit), f.bit, emit);
   g.mask = _mm256_blendv_epi8(g.mask, next, walking);
@@ -232,7 +257,7 @@ template <int Groups>
 PCL_FOT_AVX2 std::size_t BlockRayWalker::walkGroups() {
   for (int l = 0; l < 4 * Groups; ++l)
     if (!live_[l]) startRay(l);
-  std::uint64_t* const out[4] = {out_[0].data(), out_[1].data(), out_[2].data(), out_[3].data()};
+  std::uint64_t* const out[2] = {out_[0].data(), out_[1].data()};
   std::size_t n = 0;
   bool any = false;
   for (int l = 0; l < 4 * Groups; ++l) any |= live_[l] != 0;
@@ -240,9 +265,7 @@ PCL_FOT_AVX2 std::size_t BlockRayWalker::walkGroups() {
     Lanes4 g[Groups];
     for (int k = 0; k < Groups; ++k) {
       const int b = 4 * k;
-      g[k] = Lanes4{load(u_[0] + b),
-                    load(u_[1] + b),
-                    load(u_[2] + b),
+      g[k] = Lanes4{load(cell_ + b),
                     load(left_ + b),
                     load(mask_ + b),
                     _mm256_load_pd(tmax_[0] + b),
@@ -253,19 +276,17 @@ PCL_FOT_AVX2 std::size_t BlockRayWalker::walkGroups() {
     int flagged = 0;
     do {
       for (int k = 0; k < Groups; ++k) {
-        f[k] = step4(g[k], step_, tdelta_, length_, live_, 4 * k, out, n);
+        f[k] = step4(g[k], inc_, tdelta_, length_, live_, 4 * k, out, n);
         flagged |= f[k].lanes;
       }
     } while (flagged == 0 && n < kBatch);
     for (int k = 0; k < Groups; ++k) {
       const int b = 4 * k;
-      store(u_[0] + b, g[k].u0), store(u_[1] + b, g[k].u1), store(u_[2] + b, g[k].u2);
-      store(left_ + b, g[k].left), store(mask_ + b, g[k].mask);
+      store(cell_ + b, g[k].cell), store(left_ + b, g[k].left), store(mask_ + b, g[k].mask);
       _mm256_store_pd(tmax_[0] + b, g[k].t0), _mm256_store_pd(tmax_[1] + b, g[k].t1);
       _mm256_store_pd(tmax_[2] + b, g[k].t2);
       if (f[k].lanes == 0) continue;
-      store(prev_[0] + b, f[k].p0), store(prev_[1] + b, f[k].p1), store(prev_[2] + b, f[k].p2);
-      store(bit_ + b, f[k].bit);
+      store(prev_ + b, f[k].prev), store(bit_ + b, f[k].bit);
       for (int l = 0; l < 4; ++l)
         if (f[k].lanes >> l & 1) finishStep(b + l, f[k].beyond >> l & 1, f[k].crossed >> l & 1, n);
     }

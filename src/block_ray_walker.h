@@ -38,8 +38,14 @@ inline std::uint32_t leafMask(std::uint64_t cells, unsigned leaf) {
 
 /**
  * Walks rays from one sensor and hands out their cells a 4×4×4 block at a time: for each stretch of a
- * ray inside one block, the block (tree coordinates / 4) and the cells it passes there (block_cells).
- * The cells are traceSegment's, exactly: the sensor's cell first, the end cell excluded.
+ * ray inside one block, the block and the cells it passes there (block_cells). The cells are
+ * traceSegment's, exactly: the sensor's cell first, the end cell excluded.
+ *
+ * A cell is one 64-bit word here, relative to an origin near the sensor: bits 0..5 are its block_cells
+ * bit, and bits 6..62 its block, 19 bits per axis. A step adds ±1 to one axis's scattered bits (a
+ * dilated add: the gaps are filled so the carry crosses them), the cell's bit is the low six bits, and
+ * the step entered another block when anything above them changed. The words span kReach cells around
+ * the sensor per axis; rays reaching farther walk elsewhere (reaches()).
  *
  * Where the CPU has AVX2, four rays walk side by side in vector lanes. One ray's DDA is a chain of
  * dependent compares and adds, and its branches are hard to predict; four independent chains fill the
@@ -49,24 +55,44 @@ inline std::uint32_t leafMask(std::uint64_t cells, unsigned leaf) {
 class BlockRayWalker {
  public:
   static constexpr std::size_t kBatch = 256;
+  /** The origin is aligned to cubes of 2^kAlign cells, so block keys keep their alignment up to there. */
+  static constexpr unsigned kAlign = 16;
+  /** Cells per axis from the sensor's cell to a ray's end cell, at most: the words leave room for the
+   * origin's alignment and the few steps a walk may overshoot. */
+  static constexpr std::int64_t kReach = (std::int64_t(1) << 20) - (std::int64_t(1) << kAlign) - 8;
   enum class Lanes { Best, Avx2, Scalar };
 
   /**
-   * `ends` holds `count` xyz triples; every ray's ends must have valid keys, as insertRays checks. A
-   * `lanes` choice the CPU cannot run falls back to the next simpler one.
+   * `ends` holds `count` xyz triples; every ray's ends must have valid keys that the sensor reaches(), as
+   * insertRays checks. A `lanes` choice the CPU cannot run falls back to the next simpler one.
    */
   BlockRayWalker(const VoxelGrid& grid, const float sensor[3], const float* ends, std::size_t count,
                  Lanes lanes = Lanes::Best);
+
+  /** Whether a ray between these cells stays within kReach of `from` on every axis. */
+  static bool reaches(const Key& from, const Key& to);
 
   /** Walks on until a batch of stretches is ready or the rays are done. Returns the batch size, 0 at the end.
    */
   std::size_t next();
 
-  // A stretch is stored as one of its cells.
-  std::uint32_t blockX(std::size_t i) const { return std::uint32_t(out_[0][i] >> 2); }
-  std::uint32_t blockY(std::size_t i) const { return std::uint32_t(out_[1][i] >> 2); }
-  std::uint32_t blockZ(std::size_t i) const { return std::uint32_t(out_[2][i] >> 2); }
-  std::uint64_t cells(std::size_t i) const { return out_[3][i]; }
+  /** Stretch i's block as a key: one word per block, the same for every ray of this walker. */
+  std::uint64_t blockKey(std::size_t i) const { return out_[0][i] >> 6; }
+  std::uint64_t cells(std::size_t i) const { return out_[1][i]; }
+
+  /** The block of a key, in tree coordinates / 4. */
+  void block(std::uint64_t key, std::uint32_t (&b)[3]) const {
+    for (int a = 0; a < 3; ++a) b[a] = block_base_[a] + std::uint32_t(key >> (19 * a) & 0x7FFFFu);
+  }
+
+  /**
+   * The key bits that tell apart aligned cubes of 2^level cells (2 <= level): keys of one cube agree on
+   * them. Cubes beyond kAlign count as that size.
+   */
+  static std::uint64_t cubeMask(unsigned level) {
+    const std::uint64_t low = (std::uint64_t(1) << ((level < kAlign ? level : kAlign) - 2)) - 1;
+    return ~(low | low << 19 | low << 38);
+  }
 
   /** Cells of the rays walked to their end: traceSegment's counts, summed. */
   std::uint64_t cellCount() const { return cells_; }
@@ -77,6 +103,8 @@ class BlockRayWalker {
   static constexpr std::size_t kCapacity = kBatch + 2 * kLanes;
   enum class Path { Avx512, Avx2, Scalar };
 
+  /** The word of a cell in tree coordinates. */
+  std::uint64_t word(std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
   /** Loads the next ray that passes at least one cell into `lane`; false when none is left. */
   bool startRay(int lane);
   /**
@@ -84,7 +112,7 @@ class BlockRayWalker {
    * `beyond` and `crossed` (into another block) as the lanes found them.
    */
   void finishStep(int lane, bool beyond, bool crossed, std::size_t& n);
-  void emit(std::size_t& n, std::uint64_t x, std::uint64_t y, std::uint64_t z, std::uint64_t cells);
+  void emit(std::size_t& n, std::uint64_t cell, std::uint64_t cells);
   std::size_t nextScalar();
   std::size_t nextAvx2();
   std::size_t nextAvx512();
@@ -98,12 +126,15 @@ class BlockRayWalker {
   Key from_;
   Path path_;
   std::uint64_t cells_ = 0;
+  std::uint32_t origin_[3] = {0, 0, 0};      // tree coordinates of the words' zero, less the bias
+  std::uint32_t block_base_[3] = {0, 0, 0};  // origin_ / 4
+  std::uint64_t start_ = 0;                  // the sensor cell's word
 
-  // Lane state, in tree coordinates; a lane whose ray is done and has no successor is not live.
-  alignas(32) std::int64_t u_[3][kLanes] = {};     // the current cell
-  alignas(32) std::int64_t prev_[3][kLanes] = {};  // the cell before the last step
-  alignas(32) std::int64_t step_[3][kLanes] = {};  // -1, 0, 1
-  alignas(32) std::int64_t end_[3][kLanes] = {};   // the end cell
+  // Lane state; a lane whose ray is done and has no successor is not live.
+  alignas(32) std::int64_t cell_[kLanes] = {};    // the current cell's word
+  alignas(32) std::int64_t prev_[kLanes] = {};    // the word before the last step
+  alignas(32) std::int64_t end_[kLanes] = {};     // the end cell's word
+  alignas(32) std::int64_t inc_[3][kLanes] = {};  // the word's addend for a step along each axis
   alignas(32) double tmax_[3][kLanes] = {};
   alignas(32) double tdelta_[3][kLanes] = {};
   alignas(32) double length_[kLanes] = {};
@@ -113,7 +144,7 @@ class BlockRayWalker {
   alignas(32) std::uint64_t bit_[kLanes] = {};   // the current cell's
   alignas(32) std::int64_t live_[kLanes] = {};   // -1 or 0
 
-  std::vector<std::uint64_t> out_[4];  // x, y, z of a cell and the cells of each stretch
+  std::vector<std::uint64_t> out_[2];  // a cell of each stretch, as a word, and its cells
 };
 
 }  // namespace detail

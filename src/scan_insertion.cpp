@@ -16,7 +16,8 @@ namespace {
 /** Calls `visit(const Key&)` for each cell of the walker's stretch `i`. */
 template <typename Visit>
 void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& visit) {
-  const std::uint32_t block[3] = {walker.blockX(i), walker.blockY(i), walker.blockZ(i)};
+  std::uint32_t block[3];
+  walker.block(walker.blockKey(i), block);
   for (std::uint64_t cells = walker.cells(i); cells != 0; cells &= cells - 1) {
     const unsigned bit = unsigned(__builtin_ctzll(cells));
     visit(Key{tree_coord::toKey(4 * block[0] + (bit & 3u)), tree_coord::toKey(4 * block[1] + (bit >> 2 & 3u)),
@@ -47,21 +48,15 @@ class TreeWriter {
   /** The walker's batch of `n` stretches. */
   void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
     if (!line_burst_) {
-      for (std::size_t i = 0; i < n; ++i)
-        forEachCell(walker, i, [&](const Key& k) { accessor_.setValidCell(k, CellState::Free); });
+      for (std::size_t i = 0; i < n; ++i) forEachCell(walker, i, [&](const Key& k) { freeCell(k); });
       return;
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t block[3] = {walker.blockX(i), walker.blockY(i), walker.blockZ(i)};
-      const std::uint64_t cells = walker.cells(i);
-      if (skip_ != 0 &&
-          (((block[0] << 2) ^ cube_[0]) | ((block[1] << 2) ^ cube_[1]) | ((block[2] << 2) ^ cube_[2])) >>
-                  skip_ ==
-              0)
-        continue;
-      Written& w = entry(block);
-      if (w.block[0] != block[0] || w.block[1] != block[1] || w.block[2] != block[2]) {
-        replace(w, block, cells);
+      const std::uint64_t key = walker.blockKey(i), cells = walker.cells(i);
+      if (((key ^ cube_key_) & cube_mask_) == 0) continue;
+      Written& w = written_[(key * 0x9E3779B97F4A7C15u) >> (64 - written_bits_)];
+      if (w.key != key) {
+        replace(walker, w, key, cells);
         continue;
       }
       const std::uint64_t fresh = cells & ~w.cells;
@@ -69,42 +64,41 @@ class TreeWriter {
       w.cells |= cells;
       // A block that just filled goes to the tree now, which folds it. Rays keep crossing full blocks, so
       // one branch tests both conditions: it is rarely taken and easy to predict.
-      if ((~w.cells | std::uint64_t(fresh == 0)) == 0) flush(w);
+      if ((~w.cells | std::uint64_t(fresh == 0)) == 0) flush(walker, w);
     }
   }
 
   /** Writes the cells still waiting in the table; the rays' free cells are all in the tree afterwards. */
-  void finishFree() {
-    for (Written& w : written_) flush(w);
+  void finishFree(const detail::BlockRayWalker& walker) {
+    for (Written& w : written_) flush(walker, w);
   }
 
+  void freeCell(const Key& k) { accessor_.setValidCell(k, CellState::Free); }
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
 
  private:
   /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
   struct Written {
-    std::uint32_t block[3] = {0, 0, 0};  // tree coordinates / 4
-    std::uint64_t cells = 0;             // see detail::block_cells
-    std::uint64_t pending = 0;           // the subset not written to the tree yet
+    std::uint64_t key = ~std::uint64_t(0);  // the walker's block key; no block has this one
+    std::uint64_t cells = 0;                // see detail::block_cells
+    std::uint64_t pending = 0;              // the subset not written to the tree yet
   };
 
   /** Takes a new block into its slot, whose block goes to the tree; off the hot path of blocks seen. */
-  __attribute__((noinline)) void replace(Written& w, const std::uint32_t (&block)[3], std::uint64_t cells) {
-    flush(w);
-    w.block[0] = block[0], w.block[1] = block[1], w.block[2] = block[2];
+  __attribute__((noinline)) void replace(const detail::BlockRayWalker& walker, Written& w, std::uint64_t key,
+                                         std::uint64_t cells) {
+    flush(walker, w);
+    w.key = key;
     w.cells = cells;
     const unsigned leaf = detail::block_cells::leafOf(unsigned(__builtin_ctzll(cells)));
     w.pending = cells & ~detail::block_cells::leafBits(leaf);
+    std::uint32_t block[3];
+    walker.block(key, block);
     const unsigned skip = accessor_.setValidLeafCells(
-        leafKey(w.block, leaf), detail::block_cells::leafMask(cells, leaf), CellState::Free);
+        leafKey(block, leaf), detail::block_cells::leafMask(cells, leaf), CellState::Free);
     if (skip < 2) return;  // the cube must hold whole blocks
-    skip_ = skip;
-    cube_[0] = block[0] << 2, cube_[1] = block[1] << 2, cube_[2] = block[2] << 2;
-  }
-
-  Written& entry(const std::uint32_t (&block)[3]) {
-    return written_[(block[0] * 0x9E3779B1u ^ block[1] * 0x85EBCA77u ^ block[2] * 0xC2B2AE3Du) >>
-                    (32 - written_bits_)];
+    cube_key_ = key;
+    cube_mask_ = detail::BlockRayWalker::cubeMask(skip);
   }
 
   static Key leafKey(const std::uint32_t (&block)[3], unsigned leaf) {
@@ -113,10 +107,13 @@ class TreeWriter {
                tree_coord::toKey(4 * block[2] + (leaf & 4u) / 2)};
   }
 
-  void flush(Written& w) {
+  void flush(const detail::BlockRayWalker& walker, Written& w) {
+    if (w.pending == 0) return;
+    std::uint32_t block[3];
+    walker.block(w.key, block);
     for (std::uint64_t p = w.pending; p != 0;) {
       const unsigned leaf = detail::block_cells::leafOf(unsigned(__builtin_ctzll(p)));
-      accessor_.setValidLeafCells(leafKey(w.block, leaf), detail::block_cells::leafMask(p, leaf),
+      accessor_.setValidLeafCells(leafKey(block, leaf), detail::block_cells::leafMask(p, leaf),
                                   CellState::Free);
       p &= ~detail::block_cells::leafBits(leaf);
     }
@@ -125,8 +122,8 @@ class TreeWriter {
 
   Accessor accessor_;
   bool line_burst_;
-  unsigned skip_ = 0;  // a cube known free: the 2^skip_ cells around cube_ per axis (0: none)
-  std::uint32_t cube_[3] = {0, 0, 0};
+  // A cube the tree holds free: the blocks whose keys match cube_key_ on cube_mask_ (none at first).
+  std::uint64_t cube_key_ = ~std::uint64_t(0), cube_mask_ = ~std::uint64_t(0);
   unsigned written_bits_ = 10;
   std::vector<Written> written_;
 };
@@ -135,12 +132,12 @@ class GridWriter {
  public:
   explicit GridWriter(FastOccMesh& g) : grid_(g) {}
   void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
-    for (std::size_t i = 0; i < n; ++i)
-      forEachCell(walker, i, [&](const Key& k) {
-        if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
-      });
+    for (std::size_t i = 0; i < n; ++i) forEachCell(walker, i, [&](const Key& k) { freeCell(k); });
   }
-  void finishFree() {}
+  void finishFree(const detail::BlockRayWalker&) {}
+  void freeCell(const Key& k) {
+    if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
+  }
   void occupied(const Key& k) {
     if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
   }
@@ -166,6 +163,12 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
   ScanStats stats;
   std::vector<float> ends;  // xyz of each ray's end
   ends.reserve(3 * count);
+  std::vector<float> far;  // the ends of rays too long for the walker's words (see BlockRayWalker::kReach)
+  const auto addRay = [&](const float* end, const Key& end_key) {
+    std::vector<float>& to = detail::BlockRayWalker::reaches(sensor_key, end_key) ? ends : far;
+    to.insert(to.end(), end, end + 3);
+    ++stats.rays;
+  };
   std::vector<Key> endpoints;
   endpoints.reserve(count);
   const char* bytes = reinterpret_cast<const char*>(xyz);
@@ -191,9 +194,8 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
         ++stats.out_of_range;
         continue;
       }
-      ends.insert(ends.end(), end, end + 3);
+      addRay(end, end_key);
       ++stats.truncated;
-      ++stats.rays;
       continue;
     }
     Key key;
@@ -201,14 +203,15 @@ ScanStats insert(Writer& writer, const VoxelGrid& grid, const float sensor[3], c
       ++stats.out_of_range;
       continue;
     }
-    ends.insert(ends.end(), p, p + 3);
+    addRay(p, key);
     endpoints.push_back(key);
-    ++stats.rays;
   }
   detail::BlockRayWalker walker(grid, sensor, ends.data(), ends.size() / 3);
   while (const std::size_t n = walker.next()) writer.freeStretches(walker, n);
-  writer.finishFree();
+  writer.finishFree(walker);
   stats.ray_cells = walker.cellCount();
+  for (std::size_t i = 0; i < far.size(); i += 3)
+    stats.ray_cells += traceSegment(grid, sensor, &far[i], [&](const Key& k) { writer.freeCell(k); });
   // Endpoints last: within a scan, occupied wins over free.
   for (const Key& k : endpoints) writer.occupied(k);
   stats.occupied = endpoints.size();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include <octomap/OcTree.h>
@@ -202,8 +203,11 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
         BlockRayWalker walker(grid, sensor, ends.data(), rays, lanes);
         std::vector<Stretch> got;
         while (const std::size_t n = walker.next())
-          for (std::size_t i = 0; i < n; ++i)
-            got.push_back({walker.blockX(i), walker.blockY(i), walker.blockZ(i), walker.cells(i)});
+          for (std::size_t i = 0; i < n; ++i) {
+            std::uint32_t b[3];
+            walker.block(walker.blockKey(i), b);
+            got.push_back({b[0], b[1], b[2], walker.cells(i)});
+          }
         EXPECT_EQ(walker.cellCount(), cells);
         std::sort(got.begin(), got.end());
         EXPECT_TRUE(got == expected) << "lanes " << int(lanes) << " at " << res << " m: " << got.size()
@@ -267,6 +271,45 @@ TEST(ScanInsertion, LineBurstOnAndOffAgreeOnTheBlocksTheWriterRemembers) {
     ASSERT_TRUE(tree == tree_plain) << "scan " << scan;
   }
   EXPECT_GT(tree.getFreeCount(), 50000u);
+}
+
+TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {
+  // At 1 mm, rays of a kilometre pass more cells than the block walker's words span; they walk cell by
+  // cell. The short ones walk in blocks. Together they must free exactly traceSegment's cells.
+  const double res = 0.001;
+  const float sensor[3] = {0.37f, -0.21f, 0.05f};
+  const std::vector<std::array<float, 3>> ends = {
+      {1200.0f, -0.3f, 0.2f}, {0.1f, 0.2f, -1100.0f}, {-3.0f, 2.0f, 1.0f}, {0.5f, 900.0f, 0.4f}};
+  ASSERT_GT(1100.0 / res, double(detail::BlockRayWalker::kReach));
+  ASSERT_LT(900.0 / res, double(detail::BlockRayWalker::kReach));
+  Cloud cloud;
+  std::vector<Key> expected_free, endpoints;
+  std::uint64_t ray_cells = 0;
+  for (const auto& e : ends) {
+    cloud.push_back(pcl::PointXYZ(e[0], e[1], e[2]));
+    const std::vector<Key> walk = ourRay(VoxelGrid(res), sensor, e.data());
+    ray_cells += walk.size();
+    expected_free.insert(expected_free.end(), walk.begin(), walk.end());
+    Key k;
+    ASSERT_TRUE(VoxelGrid(res).pointToKey(e[0], e[1], e[2], k));
+    endpoints.push_back(k);
+  }
+  const auto less = [](const Key& a, const Key& b) {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  };
+  std::sort(expected_free.begin(), expected_free.end(), less);
+  expected_free.erase(std::unique(expected_free.begin(), expected_free.end()), expected_free.end());
+  for (bool line_burst : {true, false}) {
+    FastOctTree tree(res);
+    ScanOptions options;
+    options.line_burst = line_burst;
+    const ScanStats st = insertRays(tree, sensor, &cloud[0].x, cloud.size(), sizeof(pcl::PointXYZ), options);
+    EXPECT_EQ(st.ray_cells, ray_cells);
+    EXPECT_EQ(tree.getFreeCount(), expected_free.size());
+    for (const Key& k : expected_free) ASSERT_EQ(tree.getCell(k), CellState::Free) << toString(k);
+    EXPECT_EQ(tree.getOccupiedCount(), endpoints.size());
+    for (const Key& k : endpoints) EXPECT_EQ(tree.getCell(k), CellState::Occupied) << toString(k);
+  }
 }
 
 TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
