@@ -52,7 +52,8 @@ class Arguments {
 /** The file's extension, lower case, with the dot: ".pcd". */
 std::string extension(const std::string& path);
 
-/** Reads x, y, z of a .pcd or .ply point cloud, keeping its VIEWPOINT; PCL's own messages are silenced. */
+/** Reads x, y, z (float or double) of a .pcd or .ply point cloud, keeping its VIEWPOINT; PCL's own messages
+ * are silenced. */
 pcl::PointCloud<pcl::PointXYZ>::Ptr loadCloud(const std::string& path);
 
 /** Reads a .fot or .bt map. */
