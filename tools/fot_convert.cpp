@@ -9,6 +9,7 @@
 #include <pcl_fot/io/voxel_export.h>
 #include <pcl_fot/point_cloud_insertion.h>
 
+#include "cloud_file.h"
 #include "tool_common.h"
 
 using namespace pcl::console;

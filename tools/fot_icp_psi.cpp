@@ -11,6 +11,7 @@
 #include <pcl_fot/registration/correspondence_rejection_psi.h>
 #include <pcl_fot/registration/transformation_validation_psi.h>
 
+#include "cloud_file.h"
 #include "tool_common.h"
 
 using namespace pcl::console;

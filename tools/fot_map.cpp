@@ -1,5 +1,7 @@
 // fot_map: builds a FastOctTree map from range scans with ray tracing; writes it as .fot and for pcl_viewer.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -15,6 +17,7 @@
 #include <pcl_fot/io/voxel_export.h>
 #include <pcl_fot/occupancy_mapping.h>
 
+#include "cloud_file.h"
 #include "synthetic_scene.h"
 #include "tool_common.h"
 
@@ -29,7 +32,8 @@ void printHelp(const char* prog) {
       "Builds a FastOctTree occupancy map from range scans with ray tracing: the cells along every ray\n"
       "become free, the endpoints occupied. Each scan's pose (sensor in the map frame) is its VIEWPOINT,\n"
       "or a line of the pose file. Without scans, it maps the embedded default: a synthetic furnished room\n"
-      "seen by a depth camera from six poses.\n\n"
+      "seen by a depth camera from six poses. Scans whose rays would cross more than 1e10 cells, which\n"
+      "usually means a missing pose, are refused before any tracing (cut them with -max_range).\n\n"
       "Syntax: %s [options] [scan1.pcd|.ply scan2.pcd ...]\n\n"
       "  -res <m>          voxel edge length in metres (default: 0.05)\n"
       "  -poses <file>     one pose per scan, in order: tx ty tz qw qx qy qz per line ('#' comments)\n"
@@ -75,6 +79,23 @@ std::vector<Eigen::Affine3f> readPoses(const std::string& path) {
   return poses;
 }
 
+/** More ray cells than this (about a minute of tracing) is refused: almost always a missing sensor pose. */
+constexpr double kMaxRayCells = 1e10;
+
+/**
+ * The fewest cells the scan's rays cross: each ray's length in cells, as insertScan clips it. A cloud
+ * without a VIEWPOINT far from the origin (georeferenced data, say) would otherwise trace for hours.
+ */
+double rayCells(const Cloud& scan, double res, const pcl::fot::ScanOptions& options) {
+  double cells = 0;
+  for (const auto& p : scan) {
+    const double length = p.getVector3fMap().cast<double>().norm();
+    if (std::isfinite(length) && length >= options.min_range)
+      cells += (options.max_range > 0 ? std::min(length, options.max_range) : length) / res;
+  }
+  return cells;
+}
+
 void progress(std::size_t done, std::size_t total, double seconds) {
   const int width = 30, filled = int(width * done / (total ? total : 1));
   std::fprintf(stderr, "\r[%s%s] %zu/%zu scans, %.1f s", std::string(std::size_t(filled), '=').c_str(),
@@ -116,6 +137,17 @@ int main(int argc, char** argv) {
       if (poses.size() != scans.size())
         throw ToolError(kExitInput, "the pose file has " + std::to_string(poses.size()) + " poses for " +
                                         std::to_string(scans.size()) + " scans");
+    }
+
+    double ray_cells = 0;
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      ray_cells += rayCells(*scans[i], res, options);
+      if (ray_cells > kMaxRayCells)
+        throw ToolError(kExitInput,
+                        "the rays up to scan " + std::to_string(i + 1) + " would cross over " +
+                            std::to_string(std::uint64_t(ray_cells)) +
+                            " cells (the limit is 1e10): is its sensor pose missing? Give it with "
+                            "-poses, cut the rays with -max_range, or map the points alone with fot_convert");
     }
 
     pcl::fot::FastOctTree tree(res);

@@ -8,6 +8,7 @@
 #include <pcl_fot/point_cloud_insertion.h>
 #include <pcl_fot/psi.h>
 
+#include "cloud_file.h"
 #include "tool_common.h"
 
 using namespace pcl::console;

@@ -1,6 +1,7 @@
 #pragma once
 // What the command-line tools share: PCL-style option checks, inputs by file extension, exit codes.
 
+#include <new>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -52,10 +53,6 @@ class Arguments {
 /** The file's extension, lower case, with the dot: ".pcd". */
 std::string extension(const std::string& path);
 
-/** Reads x, y, z (float or double) of a .pcd or .ply point cloud, keeping its VIEWPOINT; PCL's own messages
- * are silenced. */
-pcl::PointCloud<pcl::PointXYZ>::Ptr loadCloud(const std::string& path);
-
 /** Reads a .fot or .bt map. */
 pcl::fot::FastOctTree loadMap(const std::string& path);
 
@@ -70,6 +67,9 @@ int runTool(const char* tool, Body&& body) {
   } catch (const ToolError& e) {
     pcl::console::print_error("%s: %s\n", tool, e.what());
     return e.code;
+  } catch (const std::bad_alloc&) {
+    pcl::console::print_error("%s: out of memory\n", tool);
+    return kExitInput;
   } catch (const std::exception& e) {
     pcl::console::print_error("%s: %s\n", tool, e.what());
     return kExitInput;

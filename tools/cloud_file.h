@@ -1,0 +1,18 @@
+#pragma once
+// Point cloud files (.pcd, .ply) for the tools, read so that a damaged file costs no more than its size.
+
+#include <string>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+namespace fot_tools {
+
+/**
+ * Reads x, y, z (float or double) of a .pcd or .ply point cloud, keeping its VIEWPOINT; PCL's own messages
+ * are silenced. Before PCL's reader runs, which allocates whatever the header claims, the claim is checked
+ * against the file's size. Throws ToolError with one line for a file it cannot use.
+ */
+pcl::PointCloud<pcl::PointXYZ>::Ptr loadCloud(const std::string& path);
+
+}  // namespace fot_tools
