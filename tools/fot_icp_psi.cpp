@@ -1,7 +1,9 @@
 // fot_icp_psi: runs pcl::IterativeClosestPoint and scores every iteration with ψ, next to ICP's own fitness.
+#include <algorithm>
 #include <string>
 #include <vector>
 
+#include <pcl/common/point_tests.h>
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
@@ -45,16 +47,21 @@ void printHelp(const char* prog) {
       prog, prog);
 }
 
-/** ICP's voxel-grid downsampling, NaN points dropped. */
+/** ICP's voxel-grid downsampling, NaN points dropped. A cloud without finite points is refused: PCL's
+ * ICP would take it and then crash in getFitnessScore. */
 Cloud::Ptr downsampled(const std::string& file, double leaf) {
-  const Cloud::Ptr cloud = loadCloud(file);
-  if (leaf <= 0) return cloud;
-  Cloud::Ptr filtered(new Cloud);
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(cloud);
-  grid.setLeafSize(float(leaf), float(leaf), float(leaf));
-  grid.filter(*filtered);
-  return filtered;
+  Cloud::Ptr cloud = loadCloud(file);
+  if (leaf > 0) {
+    Cloud::Ptr filtered(new Cloud);
+    pcl::VoxelGrid<pcl::PointXYZ> grid;
+    grid.setInputCloud(cloud);
+    grid.setLeafSize(float(leaf), float(leaf), float(leaf));
+    grid.filter(*filtered);
+    cloud = filtered;
+  }
+  if (std::none_of(cloud->begin(), cloud->end(), [](const pcl::PointXYZ& p) { return pcl::isFinite(p); }))
+    throw ToolError(kExitInput, "'" + file + "' has no finite points to register");
+  return cloud;
 }
 
 }  // namespace
