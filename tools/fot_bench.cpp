@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
     args.get("-ray_repeats", ray_repeats);
     args.get("-dmap_repeats", dmap_repeats);
     args.get("-sections", sections);
+    requireWritableDirectory(out);
     if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1)
       throw ToolError(kExitUsage, "-repeats, -ray_repeats and -dmap_repeats must be at least 1");
     auto wanted = [&](const std::string& s) {

@@ -1,6 +1,8 @@
 // fot_convert: converts maps between .fot, OctoMap .bt, voxel-centre .pcd and .vtk cube meshes.
+#include <cmath>
 #include <string>
 
+#include <pcl/common/point_tests.h>
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
 
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
     if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".pcd" && out_ext != ".vtk")
       throw ToolError(kExitUsage,
                       "cannot write '" + output + "': the output must be .fot, .bt, .pcd or .vtk");
+    requireWritableDirectory(output);
     std::vector<double> origin{0, 0, 0};
     args.get("-origin", origin, 3);
     pcl::fot::io::VoxelExportOptions exported;
@@ -79,6 +82,19 @@ int main(int argc, char** argv) {
       const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
       print_info("Inserted %zu points (skipped %zu NaN/Inf, %zu out of range)\n", st.inserted, st.non_finite,
                  st.out_of_range);
+      if (st.out_of_range > 0) {  // georeferenced data, usually: the keys reach 2^29 cells from the origin
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+        for (const auto& p : *cloud)
+          if (pcl::isFinite(p)) {
+            lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
+            hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
+          }
+        const Eigen::Vector3d centre = (lo + hi) / 2;
+        print_warn(
+            "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
+            "%.0f,%.0f,%.0f\n",
+            st.out_of_range, centre.x(), centre.y(), centre.z());
+      }
     } else if (in_ext == ".bt") {
       pcl::fot::io::BtImportOptions options;
       std::copy(origin.begin(), origin.end(), options.origin);

@@ -122,6 +122,7 @@ int main(int argc, char** argv) {
       throw ToolError(kExitUsage, "option -min_range must not be negative");
     args.get("-out", out);
     const bool with_poses = args.get("-poses", pose_file);
+    requireWritableDirectory(out + ".fot");
 
     TicToc timer;
     timer.tic();

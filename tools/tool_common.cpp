@@ -6,6 +6,9 @@
 #include <cstdlib>
 #include <sstream>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <pcl/console/print.h>
 
 #include <pcl_fot/io/fot_file.h>
@@ -89,6 +92,16 @@ std::string extension(const std::string& path) {
   std::string e = path.substr(dot);
   std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   return e;
+}
+
+void requireWritableDirectory(const std::string& file) {
+  const std::size_t slash = file.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : file.substr(0, slash);
+  struct stat st;
+  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+    throw ToolError(kExitInput, "cannot write '" + file + "': the directory '" + dir + "' does not exist");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw ToolError(kExitInput, "cannot write '" + file + "': the directory '" + dir + "' is not writable");
 }
 
 bool isMapFile(const std::string& path) {

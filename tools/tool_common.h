@@ -53,6 +53,12 @@ class Arguments {
 /** The file's extension, lower case, with the dot: ".pcd". */
 std::string extension(const std::string& path);
 
+/**
+ * Throws ToolError unless the directory `file` would be written into exists and is writable: checked before
+ * the work, so that a mistyped output path does not lose it.
+ */
+void requireWritableDirectory(const std::string& file);
+
 /** Reads a .fot or .bt map. */
 pcl::fot::FastOctTree loadMap(const std::string& path);
 
