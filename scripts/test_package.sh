@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Installs the built library into a scratch prefix and builds and runs a C++-only consumer project against
-# it with find_package(pcl_fot). Expects build/ from scripts/build.sh.
+# it with find_package(pcl_fot): the basic use, the templates with a custom point type, mixed types and
+# double, and every installed header compiled on its own. Expects build/ from scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 prefix="$PWD/build/package_test/prefix"
 rm -rf build/package_test
 cmake --install build --prefix "$prefix" >/dev/null
 cmake -S test/consumer -B build/package_test/consumer -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build/package_test/consumer -j2 >/dev/null
+cmake --build build/package_test/consumer -j2 >build/package_test/build.log 2>&1 ||
+  { cat build/package_test/build.log; exit 1; }
 LD_LIBRARY_PATH="$prefix/lib" build/package_test/consumer/consumer
-echo "package test: the consumer built against $prefix and ran"
+LD_LIBRARY_PATH="$prefix/lib" build/package_test/consumer/point_types
+echo "package test: the consumer, its point types and each header alone built against $prefix, and ran"

@@ -6,6 +6,7 @@
 
 #include <pcl/conversions.h>
 #include <pcl/registration/correspondence_rejection.h>
+#include <pcl/registration/default_convergence_criteria.h>
 
 #include <pcl_fot/registration/transformation_validation_psi.h>
 

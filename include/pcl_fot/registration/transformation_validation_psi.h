@@ -78,6 +78,5 @@ class TransformationValidationPsi : public TransformationValidation<PointSource,
 }  // namespace registration
 }  // namespace pcl
 
-#ifdef PCL_NO_PRECOMPILE
+// Header-only, as PCL's registration classes are: any source and target point types, float or double.
 #include <pcl_fot/registration/impl/transformation_validation_psi.hpp>
-#endif

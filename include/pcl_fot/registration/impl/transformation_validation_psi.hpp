@@ -97,6 +97,3 @@ bool TransformationValidationPsi<PointSource, PointTarget, Scalar>::isValid(
 
 }  // namespace registration
 }  // namespace pcl
-
-#define PCL_INSTANTIATE_TransformationValidationPsi(T) \
-  template class PCL_EXPORTS pcl::registration::TransformationValidationPsi<T, T>;
