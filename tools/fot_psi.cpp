@@ -1,4 +1,6 @@
 // fot_psi: the map similarity ψ of two point clouds or maps, with an optional transform of the first.
+#include <cstdio>
+#include <optional>
 #include <string>
 
 #include <pcl/common/transforms.h>
@@ -25,7 +27,8 @@ void printHelp(const char* prog) {
       "Syntax: %s a b [options]\n\n"
       "  a, b                 .pcd / .ply point clouds (their points become occupied cells at -res) or\n"
       "                       .fot / .bt maps (of the same grid)\n"
-      "  -res <m>             voxel edge for point clouds (default: 0.05; maps keep their own)\n"
+      "  -res <m>             voxel edge for point clouds (default: a map's grid beside a map, else 0.05;\n"
+      "                       maps keep their own)\n"
       "  -transform <tx,ty,tz,roll,pitch,yaw>  moves a (a point cloud) first: rotations in radians about\n"
       "                       x, y, z, applied in that order, then the translation\n"
       "  -free                compare free cells too (V = {occupied, free}); point clouds have none\n"
@@ -34,6 +37,14 @@ void printHelp(const char* prog) {
       "  -h                   this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read, or maps of different grids.\n",
       prog);
+}
+
+/** "0.05 m cells from (0, 0, 0)" */
+std::string describe(const pcl::fot::VoxelGrid& grid) {
+  char text[160];
+  std::snprintf(text, sizeof text, "%.9g m cells from (%.9g, %.9g, %.9g)", grid.resolution(),
+                grid.origin()[0], grid.origin()[1], grid.origin()[2]);
+  return text;
 }
 
 }  // namespace
@@ -63,27 +74,31 @@ int main(int argc, char** argv) {
     std::vector<double> t;
     const bool transformed = args.get("-transform", t, 6);
 
-    auto mapOf = [&](const std::string& path, bool first) {
-      if (isMapFile(path)) {
-        if (first && transformed)
-          throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
-        return loadMap(path);
-      }
-      const Cloud::Ptr cloud = loadCloud(path);
-      if (first && transformed) {
+    // A point cloud takes the grid of a map beside it, unless -res is given; two clouds take -res.
+    const std::string paths[2] = {args.positional()[0], args.positional()[1]};
+    std::optional<pcl::fot::FastOctTree> maps[2];
+    for (int i = 0; i < 2; ++i)
+      if (isMapFile(paths[i])) maps[i] = loadMap(paths[i]);
+    if (maps[0] && transformed) throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
+    pcl::fot::VoxelGrid cloud_grid(res);
+    if (!args.has("-res") && (maps[0] || maps[1])) cloud_grid = (maps[0] ? maps[0] : maps[1])->getGrid();
+    for (int i = 0; i < 2; ++i) {
+      if (maps[i]) continue;
+      const Cloud::Ptr cloud = loadCloud(paths[i]);
+      if (i == 0 && transformed) {
         const Eigen::Affine3f pose = Eigen::Translation3f(float(t[0]), float(t[1]), float(t[2])) *
                                      Eigen::AngleAxisf(float(t[5]), Eigen::Vector3f::UnitZ()) *
                                      Eigen::AngleAxisf(float(t[4]), Eigen::Vector3f::UnitY()) *
                                      Eigen::AngleAxisf(float(t[3]), Eigen::Vector3f::UnitX());
         pcl::transformPointCloud(*cloud, *cloud, pose);
       }
-      pcl::fot::FastOctTree tree(res);
-      pcl::fot::insertPointCloud(tree, *cloud);
-      return tree;
-    };
-    const pcl::fot::FastOctTree a = mapOf(args.positional()[0], true), b = mapOf(args.positional()[1], false);
+      maps[i].emplace(cloud_grid);
+      pcl::fot::insertPointCloud(*maps[i], *cloud);
+    }
+    const pcl::fot::FastOctTree &a = *maps[0], &b = *maps[1];
     if (a.getGrid() != b.getGrid())
-      throw ToolError(kExitInput, "the maps must share their grid (resolution and origin)");
+      throw ToolError(kExitInput, "the maps must share their grid: a has " + describe(a.getGrid()) + ", b " +
+                                      describe(b.getGrid()));
     TicToc timer;
     timer.tic();
     const pcl::fot::PsiResult r = pcl::fot::psi(a, b, options);
