@@ -80,9 +80,12 @@ struct BitCube {
       }
       return;
     }
-    for (unsigned o = 0; o < 8; ++o)
-      setFromWord(words, words[node::childBase(w) + o], level - 1, x + (o & 1u) * half,
-                  y + ((o >> 1) & 1u) * half, z + (o >> 2) * half, state);
+    for (unsigned o = 0; o < 8; ++o) {
+      const NodeWord child = words[node::childBase(w) + o];
+      if (node::isBitmap(child) && node::octantMask(child, state) == 0) continue;  // most, in sparse maps
+      setFromWord(words, child, level - 1, x + (o & 1u) * half, y + ((o >> 1) & 1u) * half,
+                  z + (o >> 2) * half, state);
+    }
   }
 };
 

@@ -134,9 +134,14 @@ class DirectedSum {
       const Key& m = certificates_[0].match;
       dir[0] = m.x >= q0.x ? 1 : -1, dir[1] = m.y >= q0.y ? 1 : -1, dir[2] = m.z >= q0.z ? 1 : -1;
     }
-    for (unsigned zi = 0; zi < side; ++zi)
+    constexpr unsigned slab_words = side * side / 64;
+    for (unsigned zi = 0; zi < side; ++zi) {
+      const unsigned z = dir[2] > 0 ? zi : side - 1 - zi;
+      std::uint64_t slab = 0;  // sparse bricks skip their empty slabs whole
+      for (unsigned k = 0; k < slab_words; ++k) slab |= cells.bits[z * slab_words + k];
+      if (slab == 0) continue;
       for (unsigned yi = 0; yi < side; ++yi) {
-        const unsigned z = dir[2] > 0 ? zi : side - 1 - zi, y = dir[1] > 0 ? yi : side - 1 - yi;
+        const unsigned y = dir[1] > 0 ? yi : side - 1 - yi;
         const std::uint64_t row = cells.row(y, z);
         if (row == 0) continue;
         for (unsigned xi = 0; xi < side; ++xi) {
@@ -144,6 +149,7 @@ class DirectedSum {
           if ((row >> x) & 1u) sum += distance(cellKey(corner, x, y, z));
         }
       }
+    }
     return sum;
   }
 
