@@ -1,4 +1,4 @@
-// fot_convert: converts maps between .fot, OctoMap .bt, voxel-centre .pcd and .vtk cube meshes.
+// fot_convert: converts maps between .fot, OctoMap .bt (and .ot in), voxel-centre .pcd and .vtk cube meshes.
 #include <cmath>
 #include <string>
 
@@ -8,6 +8,7 @@
 
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/octomap_ot.h>
 #include <pcl_fot/io/voxel_export.h>
 #include <pcl_fot/point_cloud_insertion.h>
 
@@ -23,12 +24,12 @@ void printHelp(const char* prog) {
   print_info(
       "Converts a map, or builds one from a point cloud, by the files' extensions.\n\n"
       "Syntax: %s input output [options]\n\n"
-      "  input   .fot (pcl_fot map), .bt (OctoMap binary map), or .pcd / .ply (a point cloud: its points\n"
-      "          become occupied cells, no ray tracing; needs -res)\n"
+      "  input   .fot (pcl_fot map), .bt or .ot (OctoMap binary or full map), or .pcd / .ply (a point\n"
+      "          cloud: its points become occupied cells, no ray tracing; needs -res)\n"
       "  output  .fot, .bt, .pcd (voxel centres for pcl_viewer) or .vtk (voxel cube mesh for pcl_viewer)\n\n"
       "  -res <m>            voxel edge for a point cloud input\n"
-      "  -origin <x,y,z>     map origin for a point cloud or .bt input (default: 0,0,0); for .bt, a whole\n"
-      "                      number of cells from 0 on each axis\n"
+      "  -origin <x,y,z>     map origin for a point cloud, .bt or .ot input (default: 0,0,0); for OctoMap\n"
+      "                      maps, a whole number of cells from 0 on each axis\n"
       "  -free               .pcd and .vtk outputs: free voxels as well as occupied ones\n"
       "  -color <mode>       .pcd and .vtk outputs: height (default), state, or none (.pcd only)\n"
       "  -h                  this help\n\n"
@@ -95,14 +96,15 @@ int main(int argc, char** argv) {
             "%.0f,%.0f,%.0f\n",
             st.out_of_range, centre.x(), centre.y(), centre.z());
       }
-    } else if (in_ext == ".bt") {
+    } else if (in_ext == ".bt" || in_ext == ".ot") {
       pcl::fot::io::BtImportOptions options;
       std::copy(origin.begin(), origin.end(), options.origin);
-      tree = pcl::fot::io::loadBt(input, options);
+      tree = in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
     } else if (in_ext == ".fot") {
       tree = pcl::fot::io::loadFot(input);
     } else {
-      throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .pcd or .ply");
+      throw ToolError(kExitUsage,
+                      "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
     }
 
     std::string what;

@@ -15,7 +15,7 @@ void printHelp(const char* prog) {
   print_info(
       "Prints what maps hold: resolution, origin, the extent of their known cells, depth, cell counts by\n"
       "state, node words and bytes.\n\n"
-      "Syntax: %s map.fot|map.bt [more maps ...]\n\n"
+      "Syntax: %s map.fot|map.bt|map.ot [more maps ...]\n\n"
       "  -h   this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read or is not a valid map.\n",
       prog);
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
       return kExitOk;
     }
     if (args.positional().empty())
-      throw ToolError(kExitUsage, "expected one or more .fot or .bt maps (see -h)");
+      throw ToolError(kExitUsage, "expected one or more .fot, .bt or .ot maps (see -h)");
     for (const std::string& path : args.positional()) describe(path);
     return kExitOk;
   });

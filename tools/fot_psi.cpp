@@ -26,7 +26,7 @@ void printHelp(const char* prog) {
       "the same state. 0 for equal maps; lower is better.\n\n"
       "Syntax: %s a b [options]\n\n"
       "  a, b                 .pcd / .ply point clouds (their points become occupied cells at -res) or\n"
-      "                       .fot / .bt maps (of the same grid)\n"
+      "                       .fot / .bt / .ot maps (of the same grid)\n"
       "  -res <m>             voxel edge for point clouds (default: a map's grid beside a map, else 0.05;\n"
       "                       maps keep their own)\n"
       "  -transform <tx,ty,tz,roll,pitch,yaw>  moves a (a point cloud) first: rotations in radians about\n"

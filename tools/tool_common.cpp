@@ -13,6 +13,7 @@
 
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/octomap_ot.h>
 
 namespace fot_tools {
 namespace {
@@ -106,14 +107,15 @@ void requireWritableDirectory(const std::string& file) {
 
 bool isMapFile(const std::string& path) {
   const std::string ext = extension(path);
-  return ext == ".fot" || ext == ".bt";
+  return ext == ".fot" || ext == ".bt" || ext == ".ot";
 }
 
 pcl::fot::FastOctTree loadMap(const std::string& path) {
   const std::string ext = extension(path);
   if (ext == ".fot") return pcl::fot::io::loadFot(path);
   if (ext == ".bt") return pcl::fot::io::loadBt(path);
-  throw ToolError(kExitUsage, "'" + path + "' is not a .fot or .bt map");
+  if (ext == ".ot") return pcl::fot::io::loadOt(path);
+  throw ToolError(kExitUsage, "'" + path + "' is not a .fot, .bt or .ot map");
 }
 
 }  // namespace fot_tools

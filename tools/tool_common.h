@@ -59,7 +59,7 @@ std::string extension(const std::string& path);
  */
 void requireWritableDirectory(const std::string& file);
 
-/** Reads a .fot or .bt map. */
+/** Reads a .fot, .bt or .ot map. */
 pcl::fot::FastOctTree loadMap(const std::string& path);
 
 /** True for the extensions loadMap reads. */

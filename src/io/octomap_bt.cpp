@@ -7,48 +7,16 @@
 
 #include <pcl_fot/io/file_io.h>
 
+#include "octomap_format.h"
+
 namespace pcl {
 namespace fot {
 namespace io {
 namespace {
 
-constexpr unsigned kDepth = 16;  // OctoMap's tree depth: 65536 cells per axis
-constexpr std::int32_t kCentre = 32768;
+using namespace octomap_format;
+
 constexpr char kFirstLine[] = "# Octomap OcTree binary file";
-
-// OctoMap's cells live in a staging tree whose tree coordinates are OctoMap's keys plus 0x2AAA0000, so that
-// its nodes are exactly OctoMap's: the level-16 cube at kStagingBase is OctoMap's root.
-constexpr std::uint32_t kStagingBase = 0x2AAA0000u;
-std::int32_t stagingKey(std::int32_t octomap_key) {
-  return tree_coord::toKey(kStagingBase + std::uint32_t(octomap_key));
-}
-
-/** The origin in whole cells from coordinate 0; throws if it is not on OctoMap's grid. */
-std::int32_t cellsFromZero(double origin, double res, const char* axis) {
-  const double cells = origin / res;
-  const double whole = std::round(cells);
-  if (!(std::abs(cells - whole) <= 1e-6) || std::abs(whole) > double(kMaxKey))
-    throw std::invalid_argument(
-        std::string("pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the "
-                    "resolution, but the map's origin ") +
-        axis + " = " + std::to_string(origin) + " is " + std::to_string(cells) + " cells from 0");
-  return std::int32_t(whole);
-}
-
-/** Copies every known region of `from` into `to`, keys shifted by `shift`. */
-void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t shift[3]) {
-  from.forEachRegion([&](const Region& r) {
-    const std::int64_t last = (std::int64_t(1) << r.level) - 1;
-    const std::int64_t lo[3] = {r.min_key.x + shift[0], r.min_key.y + shift[1], r.min_key.z + shift[2]};
-    for (std::int64_t c : lo)
-      if (c < kMinKey || c + last > kMaxKey)
-        throw std::invalid_argument(
-            "pcl::fot::io: the cells lie beyond the key range once moved to the origin");
-    to.setBox(Key{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])},
-              Key{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)},
-              r.state);
-  });
-}
 
 /** A child's two bits in a .bt record: 01 free leaf (bit 2i), 10 occupied leaf (bit 2i+1), 11 inner. */
 unsigned childCode(NodeWord w) {
@@ -198,76 +166,19 @@ void saveBt(const FastOctTree& tree, const std::string& path) {
 
 FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name,
                      const BtImportOptions& options) {
-  auto fail = [&](const std::string& what) {
-    return FormatError("pcl::fot::io: '" + name + "' is not a valid OctoMap .bt file: " + what);
-  };
-  // The text header: a fixed first line, then keyword lines up to "data".
-  std::size_t at = 0;
-  auto line = [&](std::string& out) {
-    const std::size_t limit = std::min(size, at + 1024);
-    std::size_t end = at;
-    while (end < limit && bytes[end] != '\n') ++end;
-    if (end == limit) throw fail("the header is truncated or has an overlong line");
-    out.assign(bytes + at, end - at);
-    if (!out.empty() && out.back() == '\r') out.pop_back();
-    at = end + 1;
-  };
-  std::string text;
-  line(text);
-  if (text.compare(0, sizeof(kFirstLine) - 1, kFirstLine) != 0)
-    throw fail("it does not start with '" + std::string(kFirstLine) + "'");
-  std::string id;
-  double res = std::numeric_limits<double>::quiet_NaN();
-  std::uint64_t declared = 0;
-  bool has_size = false;
-  for (int lines = 0;; ++lines) {
-    if (lines > 1000) throw fail("the header has no 'data' line");
-    line(text);
-    std::istringstream fields(text);
-    std::string key;
-    fields >> key;
-    if (key.empty() || key[0] == '#') continue;
-    if (key == "data") break;
-    if (key == "id") {
-      fields >> id;
-    } else if (key == "size") {
-      if (!(fields >> declared)) throw fail("the size is not a number");
-      has_size = true;
-    } else if (key == "res") {
-      if (!(fields >> res)) throw fail("the resolution is not a number");
-    }
-  }
-  if (id == "1") id = "OcTree";  // OctoMap's legacy id
-  if (id != "OcTree") throw fail("the tree type is '" + id + "'; only OcTree has a .bt form");
-  if (!has_size) throw fail("the header has no size");
-  if (!(res > 0) || !std::isfinite(res)) throw fail("the resolution is not positive and finite");
-  const std::size_t body = size - at;
+  const std::string what_file = "pcl::fot::io: '" + name + "' is not a valid OctoMap .bt file";
+  auto fail = [&](const std::string& what) { return FormatError(what_file + ": " + what); };
+  // Every occupancy tree type (OcTree, ColorOcTree, OcTreeStamped, ...) writes the same .bt body, and
+  // OctoMap reads any of them as an OcTree: so do we.
+  const Header h = readHeader(bytes, size, kFirstLine, what_file);
+  const std::size_t body = size - h.body;
   // Each inner node takes 2 bytes and has at most 8 children.
-  if (declared > 1 + 4 * std::uint64_t(body))
-    throw fail("the size " + std::to_string(declared) + " cannot fit the file");
-
-  const std::int32_t origin_cells[3] = {cellsFromZero(options.origin[0], res, "x"),
-                                        cellsFromZero(options.origin[1], res, "y"),
-                                        cellsFromZero(options.origin[2], res, "z")};
-  FastOctTree staging(res), tree(VoxelGrid(res, options.origin[0], options.origin[1], options.origin[2]));
-  staging.setMaxMemoryBytes(options.max_pool_bytes);
-  tree.setMaxMemoryBytes(options.max_pool_bytes);
-  BtReader reader(reinterpret_cast<const unsigned char*>(bytes) + at, body, staging, name);
-  if (declared > 0) {
-    const std::int32_t root[3] = {0, 0, 0};
-    reader.node(0, root);
-    if (reader.nodes() != declared)
-      throw fail("the tree has " + std::to_string(reader.nodes()) + " nodes, the header says " +
-                 std::to_string(declared));
-  }
-  if (reader.left() != 0) throw fail(std::to_string(reader.left()) + " bytes follow the tree");
-  // Staging key + 0xAAAA = OctoMap key = key + 32768 + origin cells.
-  const std::int64_t shift[3] = {0xAAAA - kCentre - std::int64_t(origin_cells[0]),
-                                 0xAAAA - kCentre - std::int64_t(origin_cells[1]),
-                                 0xAAAA - kCentre - std::int64_t(origin_cells[2])};
-  copyShifted(staging, tree, shift);
-  tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
-  return tree;
+  if (h.size > 1 + 4 * std::uint64_t(body))
+    throw fail("the size " + std::to_string(h.size) + " cannot fit the file");
+  return readBody(bytes, size, h, options, what_file,
+                  [&](const unsigned char* at, std::size_t n, FastOctTree& staging) {
+                    return BtReader(at, n, staging, name);
+                  });
 }
 
 FastOctTree loadBt(const std::string& path, const BtImportOptions& options) {

@@ -1,0 +1,100 @@
+#include "octomap_format.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace pcl {
+namespace fot {
+namespace io {
+namespace octomap_format {
+
+std::int32_t cellsFromZero(double origin, double res, const char* axis) {
+  const double cells = origin / res;
+  const double whole = std::round(cells);
+  if (!(std::abs(cells - whole) <= 1e-6) || std::abs(whole) > double(kMaxKey))
+    throw std::invalid_argument(
+        std::string("pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the "
+                    "resolution, but the map's origin ") +
+        axis + " = " + std::to_string(origin) + " is " + std::to_string(cells) + " cells from 0");
+  return std::int32_t(whole);
+}
+
+void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t shift[3]) {
+  from.forEachRegion([&](const Region& r) {
+    const std::int64_t last = (std::int64_t(1) << r.level) - 1;
+    const std::int64_t lo[3] = {r.min_key.x + shift[0], r.min_key.y + shift[1], r.min_key.z + shift[2]};
+    for (std::int64_t c : lo)
+      if (c < kMinKey || c + last > kMaxKey)
+        throw std::invalid_argument(
+            "pcl::fot::io: the cells lie beyond the key range once moved to the origin");
+    to.setBox(Key{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])},
+              Key{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)},
+              r.state);
+  });
+}
+
+Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file) {
+  auto fail = [&](const std::string& what) { return FormatError(what_file + ": " + what); };
+  std::size_t at = 0;
+  auto line = [&](std::string& out) {
+    const std::size_t limit = std::min(size, at + 1024);
+    std::size_t end = at;
+    while (end < limit && bytes[end] != '\n') ++end;
+    if (end == limit) throw fail("the header is truncated or has an overlong line");
+    out.assign(bytes + at, end - at);
+    if (!out.empty() && out.back() == '\r') out.pop_back();
+    at = end + 1;
+  };
+  std::string text;
+  line(text);
+  if (text.compare(0, std::string(first_line).size(), first_line) != 0)
+    throw fail("it does not start with '" + std::string(first_line) + "'");
+  Header h{"", 0, std::numeric_limits<double>::quiet_NaN(), 0};
+  bool has_size = false;
+  for (int lines = 0;; ++lines) {
+    if (lines > 1000) throw fail("the header has no 'data' line");
+    line(text);
+    std::istringstream fields(text);
+    std::string key;
+    fields >> key;
+    if (key.empty() || key[0] == '#') continue;
+    if (key == "data") break;
+    if (key == "id") {
+      fields >> h.id;
+    } else if (key == "size") {
+      if (!(fields >> h.size)) throw fail("the size is not a number");
+      has_size = true;
+    } else if (key == "res") {
+      if (!(fields >> h.resolution)) throw fail("the resolution is not a number");
+    }
+  }
+  if (h.id == "1") h.id = "OcTree";  // OctoMap's legacy id
+  if (h.id.empty()) throw fail("the header has no tree type (id)");
+  if (!has_size) throw fail("the header has no size");
+  if (!(h.resolution > 0) || !std::isfinite(h.resolution))
+    throw fail("the resolution is not positive and finite");
+  h.body = at;
+  return h;
+}
+
+FastOctTree placeStaging(const FastOctTree& staging, double res, const BtImportOptions& options) {
+  const std::int32_t origin_cells[3] = {cellsFromZero(options.origin[0], res, "x"),
+                                        cellsFromZero(options.origin[1], res, "y"),
+                                        cellsFromZero(options.origin[2], res, "z")};
+  FastOctTree tree(VoxelGrid(res, options.origin[0], options.origin[1], options.origin[2]));
+  tree.setMaxMemoryBytes(options.max_pool_bytes);
+  // Staging key + 0xAAAA = OctoMap key = key + 32768 + origin cells.
+  const std::int64_t shift[3] = {0xAAAA - kCentre - std::int64_t(origin_cells[0]),
+                                 0xAAAA - kCentre - std::int64_t(origin_cells[1]),
+                                 0xAAAA - kCentre - std::int64_t(origin_cells[2])};
+  copyShifted(staging, tree, shift);
+  tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
+  return tree;
+}
+
+}  // namespace octomap_format
+}  // namespace io
+}  // namespace fot
+}  // namespace pcl
