@@ -16,7 +16,8 @@ namespace io {
  * centred on coordinate 0: key K = floor(c / res) + 32768. A map is representable when its origin lies on
  * that grid (a whole number of cells from 0 on each axis) and its known cells lie within that cube; the
  * free and occupied cells are then carried over exactly. OctoMap's log-odds are not: a .bt holds
- * maximum-likelihood states only, as this map does.
+ * maximum-likelihood states only, as this map does. Every occupancy tree type (OcTree, ColorOcTree,
+ * OcTreeStamped) writes the same .bt body under its own id; the reader takes any, as OctoMap does.
  */
 
 /** The .bt bytes of a tree. Throws std::invalid_argument, saying why, if the map is not representable. */
