@@ -265,6 +265,33 @@ void expectSameRayAnswer(const Eigen::Vector3f& origin, const Eigen::Vector3f& d
   EXPECT_EQ(common_a, common_b) << "the voxels both list come in the same order";
 }
 
+/** PCL's approximate segment walk, step by step, keeping the samples inside the box. */
+Reference::AlignedPointTVector sampledCentres(const Ours& octree, const Eigen::Vector3f& from,
+                                              const Eigen::Vector3f& to, float precision) {
+  double lo[3], hi[3];
+  octree.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  const double res = octree.getResolution();
+  const float step = float(res) * precision;
+  const Eigen::Vector3f direction = (to - from).normalized();
+  const auto steps = std::max<std::size_t>(1, (to - from).norm() / step);
+  Reference::AlignedPointTVector out;
+  std::array<std::int64_t, 3> last{-1, -1, -1};
+  auto add = [&](const Eigen::Vector3f& p) {
+    std::array<std::int64_t, 3> key;
+    for (int a = 0; a < 3; ++a) {
+      if (p[a] < lo[a] || p[a] >= hi[a]) return;
+      key[a] = std::int64_t((p[a] - lo[a]) / res);
+    }
+    if (key == last) return;
+    last = key;
+    out.emplace_back(float(lo[0] + (key[0] + 0.5) * res), float(lo[1] + (key[1] + 0.5) * res),
+                     float(lo[2] + (key[2] + 0.5) * res));
+  };
+  for (std::size_t i = 0; i < steps; ++i) add(from + direction * step * float(i));
+  add(to);
+  return out;
+}
+
 }  // namespace
 
 TEST(OctreePointCloud, SegmentsAndRays) {
@@ -296,6 +323,15 @@ TEST(OctreePointCloud, SegmentsAndRays) {
     ASSERT_EQ(ref.getApproxIntersectedVoxelCentersBySegment(from, to, a, 0.2f),
               ours.getApproxIntersectedVoxelCentersBySegment(from, to, b, 0.2f));
     expectSameCentres(a, b);
+    // From 40 m outside the box to a scan point, and through it to 30 m beyond, where PCL's keys are not
+    // defined: every step sampled, those outside the box left out.
+    const Eigen::Vector3f outside = from + Eigen::Vector3f(-40.0f, 3.0f, 1.0f);
+    const Eigen::Vector3f beyond = outside + (to - outside).normalized() * 70.0f;
+    for (const auto& seg : {std::make_pair(outside, to), std::make_pair(outside, beyond)}) {
+      b.clear();
+      ours.getApproxIntersectedVoxelCentersBySegment(seg.first, seg.second, b, 0.2f);
+      expectSameCentres(sampledCentres(ours, seg.first, seg.second, 0.2f), b);
+    }
 
     // Rays at a scan point, from inside the room or from outside the box.
     const Eigen::Vector3f origin = i % 2 ? from : Eigen::Vector3f(float(lo[0]) - 3.0f, to.y(), to.z() + 0.3f);
@@ -319,10 +355,41 @@ TEST(OctreePointCloud, BadInputIsRefusedWithoutHarm) {
   ours.setOccupiedVoxelAtPoint(PointXYZ(1, 2, 3));
   ours.setOccupiedVoxelAtPoint(PointXYZ(std::nanf(""), 0, 0));
   EXPECT_EQ(ours.getLeafCount(), 1u);
+  double box[6];
+  ours.getBoundingBox(box[0], box[1], box[2], box[3], box[4], box[5]);
+  const pcl::uindex_t depth = ours.getTreeDepth();
   ours.setOccupiedVoxelAtPoint(PointXYZ(1e9f, 0, 0));  // beyond 2^29 cells of 10 cm
   EXPECT_EQ(ours.getLeafCount(), 1u);
+  double after[6];
+  ours.getBoundingBox(after[0], after[1], after[2], after[3], after[4], after[5]);
+  EXPECT_TRUE(std::equal(box, box + 6, after)) << "the box did not grow towards the point refused";
+  EXPECT_EQ(ours.getTreeDepth(), depth);
   EXPECT_TRUE(ours.isVoxelOccupiedAtPoint(PointXYZ(1, 2, 3)));
   ours.setResolution(0.2);  // refused: the octree is not empty
   EXPECT_EQ(ours.getResolution(), 0.1);
   EXPECT_FALSE(ours.isVoxelOccupiedAtPoint(pcl::index_t(5))) << "no input cloud";
+
+  // Segments: not finite, or no positive precision, leave the list as it was; a very long one ends at once.
+  Ours::AlignedPointTVector centres(2);
+  const Eigen::Vector3f at(1, 2, 3), nan_point(std::nanf(""), 0, 0), inf_point(0, INFINITY, 0);
+  EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(at, nan_point, centres), 2u);
+  EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(nan_point, at, centres), 2u);
+  EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(inf_point, at, centres), 2u);
+  for (float precision : {0.0f, -0.2f, std::nanf(""), INFINITY})
+    EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(at, at, centres, precision), 2u) << precision;
+  EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(at, at + Eigen::Vector3f(0.05f, 0, 0), centres,
+                                                           1e-20f),
+            2u)
+      << "5e17 steps are refused";
+  // Through the box from 100 km away: only the steps near the box are taken, with the same result.
+  const Eigen::Vector3f way(0.6f, 0.0f, 0.8f);
+  centres.clear();
+  ours.getApproxIntersectedVoxelCentersBySegment(at - 1e5f * way, at + 1e5f * way, centres);
+  expectSameCentres(sampledCentres(ours, at - 1e5f * way, at + 1e5f * way, 0.2f), centres);
+  EXPECT_FALSE(centres.empty());
+  // 1e11 steps: those near the box fall on floats 64 m apart, so it may list nothing, but it returns.
+  centres.clear();
+  ours.getApproxIntersectedVoxelCentersBySegment(Eigen::Vector3f(-1e9f, 2, 3), Eigen::Vector3f(1e9f, 2, 3),
+                                                 centres);
+  EXPECT_LE(centres.size(), 1u);
 }

@@ -111,6 +111,10 @@ template <typename PointT>
 bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, double z) {
   const float min_value = std::numeric_limits<float>::epsilon();
   const double p[3] = {x, y, z};
+  // A point that does not fit leaves the box as it was, not grown part of the way.
+  const auto box = std::make_tuple(std::array<double, 3>{min_[0], min_[1], min_[2]},
+                                   std::array<double, 3>{max_[0], max_[1], max_[2]}, depth_, offset_);
+  const std::size_t phantoms = phantoms_.size();
   while (true) {
     bool lower[3], upper[3];
     for (int a = 0; a < 3; ++a) {
@@ -136,6 +140,12 @@ bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, doubl
           "[pcl::fot::OctreePointCloud] The point (%g, %g, %g) would grow the octree beyond 2^%u cells per "
           "axis; it is not added.\n",
           x, y, z, detail::kMaxPclDepth);
+      const auto& [lo, hi, depth, offset] = box;
+      std::copy(lo.begin(), lo.end(), min_);
+      std::copy(hi.begin(), hi.end(), max_);
+      depth_ = depth;
+      offset_ = offset;
+      phantoms_.resize(phantoms);
       return false;
     }
     // A new root: the box doubles, downwards on every axis the point does not exceed upwards.
@@ -435,11 +445,16 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
     const Eigen::Vector3f& origin, const Eigen::Vector3f& end, AlignedPointTVector& voxel_center_list,
     float precision) {
   // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
+  const float step_size = static_cast<float>(resolution_) * precision;
+  if (!(end - origin).allFinite() || !(step_size > 0.0f) || !std::isfinite(step_size)) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] The segment must "
+              "be finite and the precision positive.\n");
+    return static_cast<uindex_t>(voxel_center_list.size());
+  }
   Eigen::Vector3f direction = end - origin;
   const float norm = direction.norm();
   direction.normalize();
-  const float step_size = static_cast<float>(resolution_) * precision;
-  const auto nsteps = std::max<std::size_t>(1, norm / step_size);
+  const double nsteps = std::max(1.0, std::floor(double(norm / step_size)));
   octree::OctreeKey prev_key;
   bool have_prev = false;
   auto add = [&](const Eigen::Vector3f& p) {
@@ -452,7 +467,33 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
     pclKeyToCenter(key, center);
     voxel_center_list.push_back(center);
   };
-  for (std::size_t i = 0; i < nsteps; ++i) add(origin + (direction * step_size * static_cast<float>(i)));
+  // Only the steps near the part of the segment inside the box can add a voxel: a far end costs nothing.
+  double t_in = 0.0, t_out = norm;
+  for (int a = 0; a < 3; ++a) {
+    const double o = origin[a], d = direction[a];
+    if (d == 0.0) {
+      if (o < min_[a] || o >= max_[a]) t_in = t_out + 1.0;
+      continue;
+    }
+    double t0 = (min_[a] - o) / d, t1 = (max_[a] - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (bounding_box_defined_ && t_in <= t_out) {
+    // A margin for the float rounding of the samples, which grows with their coordinates.
+    const double slack = 2.0 + (double(norm) + origin.cwiseAbs().sum()) * 1e-6 / step_size;
+    const double first = std::max(0.0, std::floor(t_in / step_size - slack));
+    const double last = std::min(nsteps, std::ceil(t_out / step_size + slack));
+    if (last - first > 0x1p32 || last > 0x1p53) {
+      PCL_ERROR("[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] Refused: %g steps "
+                "at this precision.\n",
+                last - first);
+      return static_cast<uindex_t>(voxel_center_list.size());
+    }
+    for (auto i = std::uint64_t(first); i < std::uint64_t(last); ++i)
+      add(origin + (direction * step_size * static_cast<float>(i)));
+  }
   add(end);
   return static_cast<uindex_t>(voxel_center_list.size());
 }
