@@ -132,6 +132,11 @@ TEST(FastOctTree, RejectsBadResolution) {
   EXPECT_THROW(FastOctTree(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
   EXPECT_THROW(FastOctTree(std::numeric_limits<double>::infinity()), std::invalid_argument);
   EXPECT_THROW(FastOctTree(0.1, std::nan("")), std::invalid_argument);
+  // Every cell centre of the key range must be a float, as PCL's points are.
+  EXPECT_THROW(FastOctTree(1e30), std::invalid_argument);
+  EXPECT_THROW(FastOctTree(0.05, 0.0, -1e39), std::invalid_argument);
+  EXPECT_NO_THROW(FastOctTree(1e29));
+  EXPECT_NO_THROW(FastOctTree(0.05, 512768.0, 5403699.0, 350.0));  // UTM
 }
 
 TEST(FastOctTree, RandomizedAgainstHashModel) {

@@ -38,6 +38,11 @@ void put32(std::string& bytes, std::size_t at, std::uint32_t v) {
 void put64(std::string& bytes, std::size_t at, std::uint64_t v) {
   for (int i = 0; i < 8; ++i) bytes[at + i] = char((v >> (8 * i)) & 0xFF);
 }
+void putDouble(std::string& bytes, std::size_t at, double v) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, 8);
+  put64(bytes, at, bits);
+}
 /** Recomputes the trailing CRC, so that a deliberate change reaches the checks behind it. */
 void reseal(std::string& bytes) {
   boost::crc_32_type crc;
@@ -111,11 +116,11 @@ TEST(FotFile, EveryHeaderFieldIsChecked) {
   put64(b, 16, 0);
   reseal(b);
   expectRejected(b, "resolution");
+  putDouble(b, 16, 1e300);  // finite, but its cell centres are not floats
+  reseal(b);
+  expectRejected(b, "float's range");
   b = good;
-  const double nan = std::nan("");
-  std::uint64_t bits;
-  std::memcpy(&bits, &nan, 8);
-  put64(b, 24, bits);
+  putDouble(b, 24, std::nan(""));
   reseal(b);
   expectRejected(b, "origin");
   b = good;

@@ -367,6 +367,10 @@ TEST(OctreePointCloud, BadInputIsRefusedWithoutHarm) {
   EXPECT_TRUE(ours.isVoxelOccupiedAtPoint(PointXYZ(1, 2, 3)));
   ours.setResolution(0.2);  // refused: the octree is not empty
   EXPECT_EQ(ours.getResolution(), 0.1);
+  Ours empty(0.1);
+  empty.setResolution(1e31);  // refused: cell centres beyond float's range
+  EXPECT_EQ(empty.getResolution(), 0.1);
+  EXPECT_THROW(Ours(1e31), std::invalid_argument);
   EXPECT_FALSE(ours.isVoxelOccupiedAtPoint(pcl::index_t(5))) << "no input cloud";
 
   // Segments: not finite, or no positive precision, leave the list as it was; a very long one ends at once.
@@ -377,9 +381,9 @@ TEST(OctreePointCloud, BadInputIsRefusedWithoutHarm) {
   EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(inf_point, at, centres), 2u);
   for (float precision : {0.0f, -0.2f, std::nanf(""), INFINITY})
     EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(at, at, centres, precision), 2u) << precision;
-  EXPECT_EQ(ours.getApproxIntersectedVoxelCentersBySegment(at, at + Eigen::Vector3f(0.05f, 0, 0), centres,
-                                                           1e-20f),
-            2u)
+  EXPECT_EQ(
+      ours.getApproxIntersectedVoxelCentersBySegment(at, at + Eigen::Vector3f(0.05f, 0, 0), centres, 1e-20f),
+      2u)
       << "5e17 steps are refused";
   // Through the box from 100 km away: only the steps near the box are taken, with the same result.
   const Eigen::Vector3f way(0.6f, 0.0f, 0.8f);

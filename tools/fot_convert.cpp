@@ -76,8 +76,9 @@ int main(int argc, char** argv) {
     pcl::fot::FastOctTree tree(1.0);
     if (in_ext == ".pcd" || in_ext == ".ply") {
       double res = 0;
-      if (!args.getPositive("-res", res))
-        throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
+      if (!args.getResolution(res)) throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
+      const std::string bad_grid = pcl::fot::VoxelGrid::whyInvalid(res, origin[0], origin[1], origin[2]);
+      if (!bad_grid.empty()) throw ToolError(kExitUsage, "options -res and -origin: " + bad_grid);
       const auto cloud = loadCloud(input);
       tree = pcl::fot::FastOctTree(pcl::fot::VoxelGrid(res, origin[0], origin[1], origin[2]));
       const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);

@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     double leaf = 0.1, res = 0.1, max_range = 1.0, max_corr = 0.5;
     int iterations = 50;
     if (args.get("-leaf", leaf) && leaf < 0) throw ToolError(kExitUsage, "option -leaf must not be negative");
-    args.getPositive("-res", res);
+    args.getResolution(res);
     args.getPositive("-max_range", max_range);
     args.getPositive("-max_corr", max_corr);
     if (args.get("-iterations", iterations) && iterations < 1)

@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
     double res = 0.05;
     std::string out = "fot_map", pose_file;
     pcl::fot::ScanOptions options;
-    args.getPositive("-res", res);
+    args.getResolution(res);
     args.getPositive("-max_range", options.max_range);
     if (args.get("-min_range", options.min_range) && options.min_range < 0)
       throw ToolError(kExitUsage, "option -min_range must not be negative");
@@ -143,12 +143,14 @@ int main(int argc, char** argv) {
     double ray_cells = 0;
     for (std::size_t i = 0; i < scans.size(); ++i) {
       ray_cells += rayCells(*scans[i], res, options);
-      if (ray_cells > kMaxRayCells)
+      if (ray_cells > kMaxRayCells) {
+        char cells[32];
+        std::snprintf(cells, sizeof(cells), "%.3g", ray_cells);
         throw ToolError(kExitInput,
-                        "the rays up to scan " + std::to_string(i + 1) + " would cross over " +
-                            std::to_string(std::uint64_t(ray_cells)) +
+                        "the rays up to scan " + std::to_string(i + 1) + " would cross " + cells +
                             " cells (the limit is 1e10): is its sensor pose missing? Give it with "
                             "-poses, cut the rays with -max_range, or map the points alone with fot_convert");
+      }
     }
 
     pcl::fot::FastOctTree tree(res);

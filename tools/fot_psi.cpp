@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
     }
     if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected two clouds or maps (see -h)");
     double res = 0.05;
-    args.getPositive("-res", res);
+    args.getResolution(res);
     pcl::fot::PsiOptions options;
     options.include_free = args.has("-free");
     options.threads = 0;

@@ -87,6 +87,13 @@ bool Arguments::getPositive(const std::string& name, double& value) const {
   return true;
 }
 
+bool Arguments::getResolution(double& value) const {
+  if (!getPositive("-res", value)) return false;
+  const std::string why = pcl::fot::VoxelGrid::whyInvalid(value, 0.0, 0.0, 0.0);
+  if (!why.empty()) throw ToolError(kExitUsage, "option -res: " + why);
+  return true;
+}
+
 std::string extension(const std::string& path) {
   const std::size_t dot = path.rfind('.');
   if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return "";

@@ -42,6 +42,8 @@ class Arguments {
   bool get(const std::string& name, std::vector<double>& values, std::size_t count) const;
   /** A positive, finite value, if given. */
   bool getPositive(const std::string& name, double& value) const;
+  /** -res, if given: a resolution VoxelGrid accepts, with cell centres that are floats. */
+  bool getResolution(double& value) const;
   const std::vector<std::string>& positional() const { return positional_; }
 
  private:

@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -87,11 +89,29 @@ class VoxelGrid {
  public:
   explicit VoxelGrid(double resolution, double origin_x = 0.0, double origin_y = 0.0, double origin_z = 0.0)
       : resolution_(resolution), origin_{origin_x, origin_y, origin_z} {
-    if (!(resolution > 0.0) || !std::isfinite(resolution))
-      throw std::invalid_argument("pcl::fot::VoxelGrid: resolution must be positive and finite, got " +
-                                  std::to_string(resolution));
-    if (!std::isfinite(origin_x) || !std::isfinite(origin_y) || !std::isfinite(origin_z))
-      throw std::invalid_argument("pcl::fot::VoxelGrid: origin must be finite");
+    const std::string why = whyInvalid(resolution, origin_x, origin_y, origin_z);
+    if (!why.empty()) throw std::invalid_argument("pcl::fot::VoxelGrid: " + why);
+  }
+
+  /**
+   * Why no grid has this resolution and origin, or "" if one does. The resolution must be positive, and
+   * every cell centre of the key range a finite float, as the points of a pcl::PointCloud are.
+   */
+  static std::string whyInvalid(double resolution, double origin_x, double origin_y, double origin_z) {
+    char text[160];
+    if (!(resolution > 0.0) || !std::isfinite(resolution)) {
+      std::snprintf(text, sizeof(text), "the resolution must be positive and finite, got %g", resolution);
+      return text;
+    }
+    const double reach = (double(kMaxKey) + 1.0) * resolution;
+    for (double o : {origin_x, origin_y, origin_z})
+      if (!(std::abs(o) + reach <= double(std::numeric_limits<float>::max()))) {
+        std::snprintf(text, sizeof(text),
+                      "resolution %g with origin (%g, %g, %g) puts cell centres beyond float's range",
+                      resolution, origin_x, origin_y, origin_z);
+        return text;
+      }
+    return {};
   }
 
   double resolution() const { return resolution_; }

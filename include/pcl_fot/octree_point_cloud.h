@@ -74,7 +74,7 @@ class OctreePointCloud {
   using LeafNodeDepthFirstIterator = LeafIterator;
   using ConstLeafNodeDepthFirstIterator = LeafIterator;
 
-  /** Throws std::invalid_argument for a resolution that is not positive and finite (PCL asserts). */
+  /** Throws std::invalid_argument for a resolution VoxelGrid refuses (PCL asserts). */
   OctreePointCloud(const double resolution_arg);
 
   void setInputCloud(const PointCloudConstPtr& cloud_arg,

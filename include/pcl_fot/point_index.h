@@ -22,7 +22,7 @@ namespace fot {
  */
 class PointIndex {
  public:
-  /** Throws std::invalid_argument for a resolution that is not positive and finite. */
+  /** Throws std::invalid_argument for a resolution VoxelGrid refuses (see VoxelGrid::whyInvalid). */
   explicit PointIndex(double resolution);
 
   /**

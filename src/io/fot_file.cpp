@@ -89,8 +89,8 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
   if (size < kHeaderBytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32),
                oz = getDouble(p + 40);
-  if (!(res > 0) || !std::isfinite(res)) throw fail("the resolution is not positive and finite");
-  if (!std::isfinite(ox) || !std::isfinite(oy) || !std::isfinite(oz)) throw fail("the origin is not finite");
+  const std::string bad_grid = VoxelGrid::whyInvalid(res, ox, oy, oz);
+  if (!bad_grid.empty()) throw fail(bad_grid);
   FastOctTree::CanonicalPool pool;
   pool.root_level = get32(p + 48);
   pool.root_base = {get32(p + 52), get32(p + 56), get32(p + 60)};

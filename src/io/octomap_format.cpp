@@ -1,6 +1,7 @@
 #include "octomap_format.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -13,11 +14,20 @@ namespace octomap_format {
 std::int32_t cellsFromZero(double origin, double res, const char* axis) {
   const double cells = origin / res;
   const double whole = std::round(cells);
-  if (!(std::abs(cells - whole) <= 1e-6) || std::abs(whole) > double(kMaxKey))
-    throw std::invalid_argument(
-        std::string("pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the "
-                    "resolution, but the map's origin ") +
-        axis + " = " + std::to_string(origin) + " is " + std::to_string(cells) + " cells from 0");
+  char text[200];
+  if (!(std::abs(whole) <= double(kMaxKey))) {
+    std::snprintf(text, sizeof(text), "pcl::fot::io: the map's origin %s = %g lies beyond 2^29 cells from 0",
+                  axis, origin);
+    throw std::invalid_argument(text);
+  }
+  if (!(std::abs(cells - whole) <= 1e-6)) {
+    std::snprintf(
+        text, sizeof(text),
+        "pcl::fot::io: OctoMap's voxel boundaries lie on multiples of the resolution, but the map's "
+        "origin %s = %.17g is %.9g cells from 0",
+        axis, origin, cells);
+    throw std::invalid_argument(text);
+  }
   return std::int32_t(whole);
 }
 
@@ -73,8 +83,8 @@ Header readHeader(const char* bytes, std::size_t size, const char* first_line, c
   if (h.id == "1") h.id = "OcTree";  // OctoMap's legacy id
   if (h.id.empty()) throw fail("the header has no tree type (id)");
   if (!has_size) throw fail("the header has no size");
-  if (!(h.resolution > 0) || !std::isfinite(h.resolution))
-    throw fail("the resolution is not positive and finite");
+  const std::string bad_grid = VoxelGrid::whyInvalid(h.resolution, 0.0, 0.0, 0.0);
+  if (!bad_grid.empty()) throw fail(bad_grid);
   h.body = at;
   return h;
 }

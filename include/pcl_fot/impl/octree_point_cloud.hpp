@@ -60,8 +60,9 @@ void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
         "[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
     return;
   }
-  if (!(resolution_arg > 0.0) || !std::isfinite(resolution_arg)) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::setResolution] The resolution must be positive and finite.\n");
+  const std::string why = VoxelGrid::whyInvalid(resolution_arg, 0.0, 0.0, 0.0);
+  if (!why.empty()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::setResolution] Refused: %s.\n", why.c_str());
     return;
   }
   resolution_ = resolution_arg;
@@ -447,8 +448,9 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
   // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
   const float step_size = static_cast<float>(resolution_) * precision;
   if (!(end - origin).allFinite() || !(step_size > 0.0f) || !std::isfinite(step_size)) {
-    PCL_ERROR("[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] The segment must "
-              "be finite and the precision positive.\n");
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] The segment must "
+        "be finite and the precision positive.\n");
     return static_cast<uindex_t>(voxel_center_list.size());
   }
   Eigen::Vector3f direction = end - origin;
@@ -486,9 +488,10 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
     const double first = std::max(0.0, std::floor(t_in / step_size - slack));
     const double last = std::min(nsteps, std::ceil(t_out / step_size + slack));
     if (last - first > 0x1p32 || last > 0x1p53) {
-      PCL_ERROR("[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] Refused: %g steps "
-                "at this precision.\n",
-                last - first);
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] Refused: %g steps "
+          "at this precision.\n",
+          last - first);
       return static_cast<uindex_t>(voxel_center_list.size());
     }
     for (auto i = std::uint64_t(first); i < std::uint64_t(last); ++i)

@@ -18,7 +18,7 @@ template <typename PointSource, typename PointTarget, typename Scalar>
 TransformationValidationPsi<PointSource, PointTarget, Scalar>::TransformationValidationPsi(double resolution,
                                                                                            double max_range)
     : resolution_(resolution), max_range_(max_range) {
-  pcl::fot::VoxelGrid check(resolution);  // throws for a resolution that is not positive and finite
+  pcl::fot::VoxelGrid check(resolution);  // throws for a resolution VoxelGrid refuses
   (void)check;
 }
 
