@@ -1,11 +1,11 @@
 // NearestCellSearch's batch query: bricks of queries settled by bit dilation, the rest searched one by one,
 // over threads.
 #include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/worker_threads.h>
 
 #include <algorithm>
 #include <array>
 #include <optional>
-#include <thread>
 
 #include "brick_distance.h"
 
@@ -106,9 +106,7 @@ std::size_t NearestCellSearch::nearest(const std::vector<Key>& queries, std::vec
   // Threads take contiguous runs of whole bricks, each with its own searcher.
   constexpr std::size_t kMinQueriesPerThread = 4096;
   const std::size_t n = order.size();
-  const std::size_t workers = std::max<std::size_t>(
-      1, std::min<std::size_t>(threads_ ? threads_ : std::max(1u, std::thread::hardware_concurrency()),
-                               n / kMinQueriesPerThread));
+  const std::size_t workers = detail::workerCount(threads_, n / kMinQueriesPerThread);
   if (workers == 1)
     return answerBricks(*this, order.data(), order.data() + n, queries, matches, max_distance);
   std::vector<std::size_t> bounds(workers + 1, n), found(workers, 0);
@@ -118,15 +116,11 @@ std::size_t NearestCellSearch::nearest(const std::vector<Key>& queries, std::vec
     while (b > 0 && b < n && sameBrick(order[b - 1], order[b])) ++b;
     bounds[w] = b;
   }
-  auto work = [&](std::size_t w) {
+  detail::runWorkers(workers, [&](std::size_t w) {
     NearestCellSearch own(tree_, metric_, target_);
     found[w] = answerBricks(own, order.data() + bounds[w], order.data() + bounds[w + 1], queries, matches,
                             max_distance);
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
+  });
   std::size_t total = 0;
   for (std::size_t f : found) total += f;
   return total;

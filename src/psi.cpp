@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
-#include <thread>
 #include <vector>
 
 #include <pcl_fot/accessor.h>
 #include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/worker_threads.h>
 
 #include "brick_distance.h"
 
@@ -206,18 +206,14 @@ std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, 
   std::vector<Piece> pieces;
   collectPieces(a.words(), a.rootWord(), a.rootLevel(), a.rootBase()[0], a.rootBase()[1], a.rootBase()[2], v,
                 pieces);
-  const unsigned workers = std::max(1u, std::min<unsigned>(threads, unsigned(pieces.size())));
+  const std::size_t workers = detail::workerCount(threads, pieces.size());
   std::vector<std::size_t> bounds(workers + 1, pieces.size());
-  for (unsigned w = 0; w < workers; ++w) bounds[w] = pieces.size() * w / workers;
+  for (std::size_t w = 0; w < workers; ++w) bounds[w] = pieces.size() * w / workers;
   std::vector<std::uint64_t> sums(workers, 0);
-  auto work = [&](unsigned w) {
+  detail::runWorkers(workers, [&](std::size_t w) {
     DirectedSum sum(a, b, v, cap);
     sums[w] = sum.pieces(pieces.data() + bounds[w], pieces.data() + bounds[w + 1]);
-  };
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
+  });
   std::uint64_t sum = 0;
   for (std::uint64_t s : sums) sum += s;
   return sum;
@@ -231,13 +227,12 @@ PsiResult psi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& opti
         "pcl::fot::psi: the maps must share their voxel grid (resolution and origin); got " +
         std::to_string(a.getResolution()) + " m and " + std::to_string(b.getResolution()) + " m cells");
   if (options.cap < 0) throw std::invalid_argument("pcl::fot::psi: the cap must not be negative");
-  const unsigned threads =
-      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   return detail::sumOverValues(
       options, a.getResolution(),
       [&](CellState v) { return std::make_pair(cellCount(a, v), cellCount(b, v)); },
       [&](CellState v) {
-        return directed(a, b, v, options.cap, threads) + directed(b, a, v, options.cap, threads);
+        return directed(a, b, v, options.cap, options.threads) +
+               directed(b, a, v, options.cap, options.threads);
       });
 }
 

@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <random>
+#include <stdexcept>
 #include <thread>
 
 #include <pcl/common/point_tests.h>
@@ -14,6 +15,7 @@
 #include <pcl_fot/occupancy_mapping.h>
 #include <pcl_fot/psi.h>
 #include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/worker_threads.h>
 
 #include "scan_data.h"
 
@@ -154,4 +156,29 @@ TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
       ASSERT_EQ(idx, serial_k[i]);
     }
   });
+}
+
+TEST(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {
+  const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+  EXPECT_EQ(detail::workerCount(0, 1000), std::min<std::size_t>(hardware, 1000));
+  EXPECT_EQ(detail::workerCount(4'000'000'000u, 1'000'000'000), 4 * hardware);
+  EXPECT_EQ(detail::workerCount(3, 2), 2u);
+  EXPECT_EQ(detail::workerCount(3, 0), 1u);
+
+  std::atomic<unsigned> ran{0};
+  EXPECT_THROW(detail::runWorkers(3,
+                                  [&](std::size_t w) {
+                                    ++ran;
+                                    if (w == 1) throw std::runtime_error("share 1");
+                                  }),
+               std::runtime_error);
+  EXPECT_EQ(ran.load(), 3u) << "every share ran before the error was passed on";
+
+  // A request for four billion threads: the same ψ, from at most four per hardware thread.
+  const FastOctTree& a = roomMap();
+  FastOctTree b(0.05);
+  insertScan(b, *pcl_fot_test::loadScan("room_scan2.pcd"));
+  PsiOptions many;
+  many.threads = 4'000'000'000u;
+  EXPECT_EQ(psi(a, b, many).sum, psi(a, b).sum);
 }

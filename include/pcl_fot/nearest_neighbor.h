@@ -287,7 +287,7 @@ class NearestCellSearch {
 
   /**
    * Threads for the batch query: 1 (the default) runs it in the caller's thread, 0 takes every hardware
-   * thread. The answers do not depend on the count.
+   * thread, and at most four per hardware thread are used. The answers do not depend on the count.
    */
   void setNumberOfThreads(unsigned threads) { threads_ = threads; }
   unsigned getNumberOfThreads() const { return threads_; }

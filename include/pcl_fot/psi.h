@@ -14,7 +14,10 @@ struct PsiOptions {
   bool include_free = false;
   /** Each cell's distance counts at most this many cells: a robust score for registration. */
   std::int64_t cap = std::numeric_limits<std::int64_t>::max();
-  /** Worker threads; 0 takes every hardware thread. The result does not depend on it. */
+  /**
+   * Worker threads; 0 takes every hardware thread, and at most four per hardware thread are used. The
+   * result does not depend on it.
+   */
   unsigned threads = 1;
 };
 

@@ -64,7 +64,8 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
 
   /**
    * Threads for the batch searches: 1 (the default) runs them in the caller's thread, 0 takes every hardware
-   * thread. Single queries are safe from many threads at once in any case.
+   * thread, and at most four per hardware thread are used. Single queries are safe from many threads at
+   * once in any case.
    */
   void setNumberOfThreads(unsigned threads) {
     threads_ = threads;

@@ -1,12 +1,12 @@
 #pragma once
 
 #include <algorithm>
-#include <thread>
 
 #include <pcl/console/print.h>
 
 #include <pcl_fot/cloud_fingerprint.h>
 #include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/worker_threads.h>
 
 namespace pcl {
 namespace fot {
@@ -76,17 +76,11 @@ int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, 
 template <typename PointT>
 template <typename Query>
 void FastOctTreeSearch<PointT>::forEachQuery(std::size_t n, Query&& query) const {
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const std::size_t workers =
-      std::min<std::size_t>(threads_ ? threads_ : hardware, std::max<std::size_t>(n, 1));
+  const std::size_t workers = detail::workerCount(threads_, n);
   // Contiguous runs keep each thread's queries together in space, as its LineBurst path likes them.
-  auto run = [&](std::size_t w) {
+  detail::runWorkers(workers, [&](std::size_t w) {
     for (std::size_t i = n * w / workers, end = n * (w + 1) / workers; i < end; ++i) query(i);
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(run, w);
-  run(0);
-  for (auto& t : pool) t.join();
+  });
 }
 
 template <typename PointT>
