@@ -6,41 +6,55 @@ namespace pcl {
 namespace fot {
 namespace detail {
 
-PartCache::PartCache(const FastOctTree& tree, CellState state)
-    : tree_(tree), state_(state), cells_(tree), slots_(kSlots) {}
+namespace {
 
-void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& out) {
-  out.part = Part{};
+/** Cache slots for a tree of `words` node words: about one per eight, a power of two from 64 to `most`. */
+std::size_t slotsFor(std::size_t words, std::size_t most) {
+  std::size_t slots = 64;
+  while (slots < most && slots * 8 < words) slots *= 2;
+  return slots;
+}
+
+}  // namespace
+
+PartCache::PartCache(const FastOctTree& tree, CellState state)
+    : tree_(tree),
+      state_(state),
+      cells_(tree),
+      mask_(slotsFor(tree.poolWords(), kMaxSlots) - 1),
+      tags_(mask_ + 1, Tag{{0, 0, 0}, 0}),
+      words_(new std::uint64_t[(mask_ + 1) * Part::kWords]) {}
+
+void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Part& out) {
   const NodeWord* words = tree_.words();
   const unsigned root_level = tree_.rootLevel();
   if (root_level <= 3) {  // the whole tree fits one part: it lies inside this one or outside it
     const auto& base = tree_.rootBase();
     if (((base[0] - x) | (base[1] - y) | (base[2] - z)) < 8)
-      out.part.setFromWord(words, tree_.rootWord(), root_level, base[0] - x, base[1] - y, base[2] - z,
-                           state_);
+      out.setFromWord(words, tree_.rootWord(), root_level, base[0] - x, base[1] - y, base[2] - z, state_);
   } else {
     const unsigned bottom =
         cells_.locatePath(Key{tree_coord::toKey(x), tree_coord::toKey(y), tree_coord::toKey(z)});
     if (bottom > 3) {  // inside a uniform octant at least as large as the part
       if (node::state(words[cells_.pathOffset(bottom)], tree_coord::octant(x, y, z, bottom)) == state_)
-        out.part.bits.fill(~std::uint64_t(0));
+        out.bits.fill(~std::uint64_t(0));
     } else if (bottom != 0) {
-      out.part.setFromWord(words, words[cells_.pathOffset(3)], 3, 0, 0, 0, state_);
+      out.setFromWord(words, words[cells_.pathOffset(3)], 3, 0, 0, 0, state_);
     }
   }
-  out.empty = !out.part.any();
 }
 
-const PartCache::Entry& PartCache::part(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-  const std::size_t slot =
-      ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) & (kSlots - 1);
-  Entry& e = slots_[slot];
-  if (!e.valid || e.corner[0] != x || e.corner[1] != y || e.corner[2] != z) {
-    read(x, y, z, e);
-    e.corner[0] = x, e.corner[1] = y, e.corner[2] = z;
-    e.valid = true;
+const std::uint64_t* PartCache::part(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  const std::size_t slot = ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) & mask_;
+  Tag& tag = tags_[slot];
+  std::uint64_t* bits = words_.get() + slot * Part::kWords;
+  if (!tag.held || tag.corner[0] != x || tag.corner[1] != y || tag.corner[2] != z) {
+    Part p;
+    read(x, y, z, p);
+    std::copy(p.bits.begin(), p.bits.end(), bits);
+    tag = Tag{{x, y, z}, std::uint8_t(p.any() ? 2 : 1)};
   }
-  return e;
+  return tag.held == 2 ? bits : nullptr;
 }
 
 template <unsigned Reach>
@@ -52,11 +66,11 @@ bool BrickWindow<Reach>::load(PartCache& parts, const std::uint32_t lo[3]) {
   for (unsigned k = 0; k < kParts; ++k)
     for (unsigned j = 0; j < kParts; ++j)
       for (unsigned i = 0; i < kParts; ++i) {
-        const PartCache::Entry& p = parts.part(lo[0] + 8 * i, lo[1] + 8 * j, lo[2] + 8 * k);
-        if (p.empty) continue;
+        const std::uint64_t* p = parts.part(lo[0] + 8 * i, lo[1] + 8 * j, lo[2] + 8 * k);
+        if (!p) continue;
         any = true;
         for (unsigned z = 0; z < 8; ++z) {
-          const std::uint64_t slice = p.part.bits[z];  // row y of this slice is byte y
+          const std::uint64_t slice = p[z];  // row y of this slice is byte y
           if (!slice) continue;
           Row* at = r + (8 * k + z) * kWindow + 8 * j;
           for (unsigned y = 0; y < 8; ++y) at[y] |= Row((slice >> (8 * y)) & 0xFFu) << (8 * i);

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <memory>
 #include <stdexcept>
 #include <type_traits>
 #include <vector>
@@ -96,26 +97,30 @@ struct BitCube {
 class PartCache {
  public:
   using Part = BitCube<8>;
-  struct Entry {
-    std::uint32_t corner[3] = {0, 0, 0};
-    bool valid = false;
-    bool empty = true;
-    Part part;
-  };
 
   PartCache(const FastOctTree& tree, CellState state);
-  /** The part whose lowest corner is (x, y, z), in tree coordinates, multiples of 8. */
-  const Entry& part(std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /**
+   * The part whose lowest corner is (x, y, z), in tree coordinates, multiples of 8: its words, slice z in
+   * word z and row y in byte y; nullptr if it holds no cell.
+   */
+  const std::uint64_t* part(std::uint32_t x, std::uint32_t y, std::uint32_t z);
 
  private:
-  static constexpr std::size_t kSlots = 4096;  // a power of two: the slot is a mask, not a division
+  static constexpr std::size_t kMaxSlots = 4096;
+  /** Which part a slot holds. Only the tags start zeroed (no part): a slot's words are written when read. */
+  struct Tag {
+    std::uint32_t corner[3];
+    std::uint8_t held;  // 0: none yet, 1: an empty part, 2: a part with cells
+  };
 
-  void read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Entry& out);
+  void read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Part& out);
 
   const FastOctTree& tree_;
   CellState state_;
   ConstAccessor cells_;
-  std::vector<Entry> slots_;
+  std::size_t mask_;  // slots - 1: a power of two, as a small tree needs fewer, so the slot is a mask
+  std::vector<Tag> tags_;
+  std::unique_ptr<std::uint64_t[]> words_;  // Part::kWords per slot
 };
 
 /** The cells of an aligned 16³ brick: one level-4 node. */

@@ -18,7 +18,8 @@ namespace detail {
  * unbounded request must not become unbounded memory.
  */
 inline std::size_t workerCount(unsigned requested, std::size_t pieces) {
-  const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+  if (requested == 1 || pieces <= 1) return 1;
+  static const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());  // reads /sys
   const std::size_t wanted = requested ? std::min<std::size_t>(requested, 4 * hardware) : hardware;
   return std::max<std::size_t>(1, std::min(wanted, pieces));
 }
