@@ -89,7 +89,9 @@ TEST(CloudFile, EveryTruncationFailsWithOneMessage) {
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const std::size_t header = bytes.find("DATA");
     ASSERT_NE(header, std::string::npos);
-    for (std::size_t size = header; size < bytes.size(); size += 97) {
+    // From the empty file (PCL 1.13 crashes on it) through the header (PCL reads one without DATA as no
+    // points) into the data.
+    for (std::size_t size = 0; size < bytes.size(); size += size < header + 8 ? 3 : 97) {
       std::ofstream(cut, std::ios::binary).write(bytes.data(), std::streamsize(size));
       try {
         fot_tools::loadCloud(cut);
@@ -104,6 +106,28 @@ TEST(CloudFile, EveryTruncationFailsWithOneMessage) {
   }
   std::filesystem::remove(whole);
   std::filesystem::remove(cut);
+}
+
+TEST(CloudFile, WhatIsNotACloudFileFailsWithoutReadingItAll) {
+  auto expectRefused = [](const std::string& path, const std::string& words) {
+    try {
+      fot_tools::loadCloud(path);
+      ADD_FAILURE() << path << " loaded";
+    } catch (const fot_tools::ToolError& e) {
+      EXPECT_EQ(e.code, fot_tools::kExitInput);
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  // A device has no end: it is refused before it is read.
+  const std::string device = tempPath("device.pcd");
+  std::filesystem::create_symlink("/dev/zero", device);
+  expectRefused(device, "not a regular file");
+  std::filesystem::remove(device);
+  // Lines no header has: 4 MiB without a line end.
+  const std::string blob = tempPath("blob.ply");
+  std::ofstream(blob, std::ios::binary) << "ply\n" << std::string(4 << 20, 'x');
+  expectRefused(blob, "no end_header line");
+  std::filesystem::remove(blob);
 }
 
 }  // namespace

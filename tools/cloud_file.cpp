@@ -9,6 +9,8 @@
 #include <sstream>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -37,10 +39,21 @@ std::uint64_t times(std::uint64_t a, std::uint64_t b) {
              : a * b;
 }
 
-/** A line of a header, split into words, without its line end. False at the end of the file. */
+/**
+ * A line of a header, split into words, without its line end. False at the end of the file, and for a line
+ * longer than any header's: a binary file need not hold a line end at all.
+ */
 bool headerLine(std::istream& in, std::vector<std::string>& words) {
+  constexpr std::size_t kMaxLine = 1 << 20;
   std::string line;
-  if (!std::getline(in, line)) return false;
+  for (int c; (c = in.get()) != '\n';) {
+    if (c == std::char_traits<char>::eof()) {
+      if (line.empty()) return false;
+      break;
+    }
+    if (line.size() == kMaxLine) return false;
+    line.push_back(char(c));
+  }
   std::istringstream split(line);
   words.clear();
   for (std::string w; split >> w;) words.push_back(w);
@@ -55,10 +68,10 @@ std::uint64_t number(const std::string& word) {
 
 /**
  * The fewest bytes the data after a PCD header can hold its points in: all of them in binary, an 88th
- * compressed (LZF's best ratio), a character and a separator a value in ASCII. 0 if the header is not one
- * PCL reads.
+ * compressed (LZF's best ratio), a character and a separator a value in ASCII. False if the header does
+ * not end in a DATA line.
  */
-std::uint64_t pcdDataBytes(std::istream& in) {
+bool pcdDataBytes(std::istream& in, std::uint64_t& bytes) {
   std::vector<std::string> w;
   std::vector<std::uint64_t> sizes, counts;
   std::uint64_t width = 0, height = 0, points = 0;
@@ -75,19 +88,24 @@ std::uint64_t pcdDataBytes(std::istream& in) {
       for (std::size_t i = 0; i < sizes.size(); ++i)
         point_bytes += times(sizes[i], counts[i]), values += counts[i];
       points = std::max(points, times(width, height));
-      if (w[1] == "binary") return times(points, point_bytes);
-      if (w[1] == "binary_compressed") return times(points, point_bytes) / 88;
       const std::uint64_t chars = times(points, 2 * values);
-      return chars ? chars - 1 : 0;
+      bytes = w[1] == "binary"              ? times(points, point_bytes)
+              : w[1] == "binary_compressed" ? times(points, point_bytes) / 88
+              : chars                       ? chars - 1
+                                            : 0;
+      return true;
     }
   }
-  return 0;
+  return false;
 }
 
-/** The same for a PLY header, over all its elements: whole in binary, two characters a value in ASCII. */
-std::uint64_t plyDataBytes(std::istream& in) {
+/**
+ * The same for a PLY header, over all its elements: whole in binary, two characters a value in ASCII.
+ * False if the header does not end in end_header.
+ */
+bool plyDataBytes(std::istream& in, std::uint64_t& bytes) {
   std::vector<std::string> w;
-  if (!headerLine(in, w) || w.empty() || w[0] != "ply") return 0;
+  if (!headerLine(in, w) || w.empty() || w[0] != "ply") return false;
   bool ascii = false;
   std::uint64_t total = 0, count = 0, item_bytes = 0;
   auto typeBytes = [](const std::string& t) -> std::uint64_t {
@@ -108,20 +126,31 @@ std::uint64_t plyDataBytes(std::istream& in) {
       item_bytes += ascii ? 2 : typeBytes(w[1] == "list" ? w[2] : w[1]);
     } else if (w[0] == "end_header") {
       total += times(count, item_bytes);
-      return ascii && total ? total - 1 : total;  // the last value needs no separator
+      bytes = ascii && total ? total - 1 : total;  // the last value needs no separator
+      return true;
     }
   }
-  return 0;
+  return false;
 }
 
 /**
  * PCL's readers allocate what the header claims before they read: a damaged count in a file of a few bytes
- * would cost gigabytes. Refuses a header whose points cannot fit in the rest of the file.
+ * would cost gigabytes. Refuses a file that is not a regular file (a device could be read forever), a
+ * header that never ends (PCL 1.13 crashes on an empty PCD file, and reads one without DATA as no points),
+ * and a header whose points cannot fit in the rest of the file.
  */
 void checkClaim(const std::string& path, const std::string& ext) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) return;  // PCL's reader reports it
+  if (!S_ISREG(st.st_mode)) throw ToolError(kExitInput, "'" + path + "' is not a regular file");
   std::ifstream in(path, std::ios::binary);
-  if (!in) return;  // PCL's reader reports it
-  const std::uint64_t needed = ext == ".pcd" ? pcdDataBytes(in) : plyDataBytes(in);
+  if (!in) return;
+  std::uint64_t needed = 0;
+  if (!(ext == ".pcd" ? pcdDataBytes(in, needed) : plyDataBytes(in, needed)))
+    throw ToolError(kExitInput, "'" + path + "' is damaged or truncated: its " +
+                                    (ext == ".pcd" ? "PCD header has no DATA line"
+                                                   : "PLY header has no end_header line"));
+  in.clear();
   const std::streamoff data_start = in.tellg();
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();

@@ -159,6 +159,9 @@ int main(int argc, char** argv) {
       progress(i, scans.size(), timer.toc() / 1000.0);
       const pcl::fot::ScanStats st = with_poses ? pcl::fot::insertScan(tree, *scans[i], poses[i], options)
                                                 : pcl::fot::insertScan(tree, *scans[i], options);
+      if (st.rays == 0)
+        print_warn("\nScan %zu has no point to trace (%zu NaN/Inf, %zu out of range, %zu too close).\n",
+                   i + 1, st.non_finite, st.out_of_range, st.too_close);
       total.rays += st.rays;
       total.non_finite += st.non_finite;
       total.out_of_range += st.out_of_range;
