@@ -6,6 +6,7 @@
 #include <cstring>
 #include <random>
 
+#include <sys/stat.h>
 #include <unistd.h>
 #include <boost/crc.hpp>
 
@@ -200,4 +201,18 @@ TEST(FotFile, FilesThatCannotBeReadOrAreHuge) {
   }
   EXPECT_THROW(io::loadFot(path), io::FormatError) << "refused by its size, before reading";
   std::remove(path.c_str());
+
+  // What has no size to check: a directory, a device without end, a FIFO no one writes (opening it for
+  // reading would wait for a writer).
+  const std::string fifo = tempPath("fifo.fot");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& odd : {std::string("/tmp"), std::string("/dev/zero"), fifo}) {
+    try {
+      io::loadFot(odd);
+      ADD_FAILURE() << odd << " loaded";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  std::remove(fifo.c_str());
 }

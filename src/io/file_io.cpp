@@ -1,12 +1,13 @@
 #include <pcl_fot/io/file_io.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <stdexcept>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace pcl {
@@ -49,17 +50,31 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
 }
 
 std::string readFile(const std::string& path, std::size_t max_bytes) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) fail("open", path, errno);
-  const std::streamoff size = in.tellg();
-  if (size < 0) fail("read", path, errno);
-  if (std::uint64_t(size) > max_bytes)
+  // O_NONBLOCK: opening a FIFO without a writer would wait for one.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) fail("open", path, errno);
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st;
+  if (::fstat(fd, &st) != 0) fail("read", path, errno);
+  // A device, pipe or directory has no size to check against max_bytes, and /dev/zero has no end.
+  if (!S_ISREG(st.st_mode)) throw std::runtime_error("pcl::fot::io: '" + path + "' is not a regular file");
+  const std::uint64_t size = std::uint64_t(st.st_size);
+  if (size > max_bytes)
     throw std::length_error("pcl::fot::io: '" + path + "' has " + std::to_string(size) +
                             " bytes, more than the " + std::to_string(max_bytes) +
                             " a valid file of its kind can have here");
   std::string bytes(std::size_t(size), '\0');
-  in.seekg(0);
-  if (!in.read(&bytes[0], size)) fail("read", path, errno);
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::read(fd, &bytes[done], bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) fail("read", path, errno);
+    if (n == 0) fail("read", path, EIO);  // shorter than its size: it changed while read
+    done += std::size_t(n);
+  }
   return bytes;
 }
 

@@ -15,8 +15,8 @@ namespace io {
 void writeFileAtomically(const std::string& path, const std::string& bytes);
 
 /**
- * The whole content of a file. Throws std::runtime_error if it cannot be read, and std::length_error,
- * before reading, if it is larger than max_bytes.
+ * The whole content of a regular file. Throws std::runtime_error if it cannot be read or is not a regular
+ * file (a directory, device or pipe), and std::length_error, before reading, if it is larger than max_bytes.
  */
 std::string readFile(const std::string& path, std::size_t max_bytes);
 
