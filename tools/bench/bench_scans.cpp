@@ -1,10 +1,10 @@
 #include "bench_scans.h"
 
 #include <cmath>
-#include <stdexcept>
 
 #include <pcl/common/common.h>
-#include <pcl/io/pcd_io.h>
+
+#include "../cloud_file.h"
 
 namespace fot_bench {
 
@@ -19,10 +19,8 @@ std::vector<BenchScan> loadBenchScans(const std::string& data_dir) {
                         {"room_scan2", 0.05, true},         {"terrain_samp11", 0.30, false}};
   std::vector<BenchScan> scans;
   for (const Spec& s : specs) {
-    BenchScan scan{s.name, s.resolution, s.has_sensor,
-                   pcl::PointCloud<pcl::PointXYZ>::Ptr(new pcl::PointCloud<pcl::PointXYZ>), 0};
-    const std::string path = data_dir + "/" + s.name + ".pcd";
-    if (pcl::io::loadPCDFile(path, *scan.cloud) != 0) throw std::runtime_error("cannot read " + path);
+    BenchScan scan{s.name, s.resolution, s.has_sensor, fot_tools::loadCloud(data_dir + "/" + s.name + ".pcd"),
+                   0};
     if (!s.has_sensor) {
       pcl::PointXYZ lo, hi;
       pcl::getMinMax3D(*scan.cloud, lo, hi);
