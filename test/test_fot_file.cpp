@@ -1,10 +1,14 @@
 // The .fot format: bit-identical round trips, and a clear error for every damaged or hostile file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <random>
+#include <thread>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -215,4 +219,37 @@ TEST(FotFile, FilesThatCannotBeReadOrAreHuge) {
     }
   }
   std::remove(fifo.c_str());
+}
+
+TEST(FotFile, SavesAreAtomicEvenFromThreadsSavingOnePath) {
+  // Four maps of different sizes, saved over one path from four threads at once: the file is always one of
+  // them whole, and no temporary file is left behind.
+  std::vector<FastOctTree> maps;
+  for (int m = 0; m < 4; ++m) {
+    maps.emplace_back(0.1);
+    for (int i = 0; i < 200 * (m + 1); ++i) maps.back().setCell({i % 37, i / 37, m}, CellState::Occupied);
+  }
+  const std::string dir = tempPath("atomic_dir");
+  std::filesystem::create_directory(dir);
+  const std::string path = dir + "/map.fot";
+  std::vector<std::thread> savers;
+  std::atomic<int> failures{0};
+  for (int m = 0; m < 4; ++m)
+    savers.emplace_back([&, m] {
+      for (int round = 0; round < 25; ++round) try {
+          io::saveFot(maps[std::size_t(m)], path);
+        } catch (const std::exception&) {
+          ++failures;
+        }
+    });
+  for (auto& t : savers) t.join();
+  EXPECT_EQ(failures.load(), 0);
+  const FastOctTree saved = io::loadFot(path);
+  EXPECT_TRUE(std::any_of(maps.begin(), maps.end(), [&](const FastOctTree& m) { return m == saved; }));
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 1u) << "a temporary file was left behind";
+  // A save that cannot be made leaves nothing either.
+  EXPECT_THROW(io::saveFot(maps[0], dir + "/missing/map.fot"), std::runtime_error);
+  std::filesystem::remove_all(dir);
 }

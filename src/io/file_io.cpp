@@ -1,5 +1,6 @@
 #include <pcl_fot/io/file_io.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -21,8 +22,10 @@ namespace {
 }  // namespace
 
 void writeFileAtomically(const std::string& path, const std::string& bytes) {
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Unique per process and per call, so that threads saving the same path do not share a temporary file.
+  static std::atomic<std::uint64_t> calls{0};
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(calls++);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) fail("create", tmp, errno);
   std::size_t done = 0;
   while (done < bytes.size()) {
