@@ -103,6 +103,15 @@ TEST(TransformationValidationPsi, BadInput) {
   Cloud::Ptr nans(new Cloud);
   nans->push_back(PointXYZ(std::nanf(""), 0, 0));
   EXPECT_EQ(psi.validateTransformation(nans, one, Eigen::Matrix4f::Identity()), DBL_MAX);
+  // Caps too large for any distance, or not numbers, cap nothing.
+  Cloud::Ptr far(new Cloud);
+  far->push_back(PointXYZ(41, 2, 3));
+  const double uncapped = Validation(0.1, 0.0).validateTransformation(far, one, Eigen::Matrix4f::Identity());
+  EXPECT_GT(uncapped, 0.0);
+  for (double range : {1e300, double(INFINITY), double(NAN)})
+    EXPECT_EQ(Validation(0.1, range).validateTransformation(far, one, Eigen::Matrix4f::Identity()), uncapped)
+        << range;
+  EXPECT_LT(Validation(0.1, 1.0).validateTransformation(far, one, Eigen::Matrix4f::Identity()), uncapped);
 }
 
 TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {

@@ -34,7 +34,9 @@ class TransformationValidationPsi : public TransformationValidation<PointSource,
   using typename Base::PointCloudSourceConstPtr;
   using typename Base::PointCloudTargetConstPtr;
 
-  /** `resolution`: the cell edge in metres; `max_range`: the most one cell's distance counts (≤ 0: no cap).
+  /**
+   * `resolution`: the cell edge in metres; `max_range`: the most one cell's distance counts (≤ 0, NaN or
+   * Inf: no cap).
    */
   explicit TransformationValidationPsi(double resolution = 0.05, double max_range = 1.0);
 

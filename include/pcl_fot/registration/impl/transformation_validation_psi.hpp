@@ -68,7 +68,8 @@ pcl::fot::PsiResult TransformationValidationPsi<PointSource, PointTarget, Scalar
     return none;
   }
   pcl::fot::PsiOptions options;
-  if (max_range_ > 0) options.cap = std::int64_t(std::ceil(max_range_ / resolution_));
+  const double cap_cells = std::ceil(max_range_ / resolution_);
+  if (cap_cells > 0 && cap_cells < 0x1p62) options.cap = std::int64_t(cap_cells);  // larger caps nothing
   return pcl::fot::psi(source, *target, options);
 }
 
