@@ -140,8 +140,19 @@ int main(int argc, char** argv) {
                                         std::to_string(scans.size()) + " scans");
     }
 
+    // Checked before any tracing, so that a bad pose costs no work.
+    const pcl::fot::VoxelGrid grid(res);
     double ray_cells = 0;
     for (std::size_t i = 0; i < scans.size(); ++i) {
+      const Eigen::Vector3f sensor =
+          with_poses ? poses[i].translation() : Eigen::Vector3f(scans[i]->sensor_origin_.head<3>());
+      pcl::fot::Key key;
+      if (!grid.pointToKey(sensor.x(), sensor.y(), sensor.z(), key)) {
+        char where[96];
+        std::snprintf(where, sizeof(where), "(%g, %g, %g)", sensor.x(), sensor.y(), sensor.z());
+        throw ToolError(kExitInput, "scan " + std::to_string(i + 1) + "'s sensor at " + where +
+                                        " is not finite or lies beyond the map's 2^29 cells");
+      }
       ray_cells += rayCells(*scans[i], res, options);
       if (ray_cells > kMaxRayCells) {
         char cells[32];
@@ -153,7 +164,7 @@ int main(int argc, char** argv) {
       }
     }
 
-    pcl::fot::FastOctTree tree(res);
+    pcl::fot::FastOctTree tree(grid);
     pcl::fot::ScanStats total;
     for (std::size_t i = 0; i < scans.size(); ++i) {
       progress(i, scans.size(), timer.toc() / 1000.0);
