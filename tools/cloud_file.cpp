@@ -9,8 +9,6 @@
 #include <sstream>
 #include <vector>
 
-#include <sys/stat.h>
-
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -39,21 +37,11 @@ std::uint64_t times(std::uint64_t a, std::uint64_t b) {
              : a * b;
 }
 
-/**
- * A line of a header, split into words, without its line end. False at the end of the file, and for a line
- * longer than any header's: a binary file need not hold a line end at all.
- */
+/** A line of a header, split into words. False at the end of the file, and for a line longer than any
+ * header's: a binary file need not hold a line end at all. */
 bool headerLine(std::istream& in, std::vector<std::string>& words) {
-  constexpr std::size_t kMaxLine = 1 << 20;
   std::string line;
-  for (int c; (c = in.get()) != '\n';) {
-    if (c == std::char_traits<char>::eof()) {
-      if (line.empty()) return false;
-      break;
-    }
-    if (line.size() == kMaxLine) return false;
-    line.push_back(char(c));
-  }
+  if (!readLine(in, line, 1 << 20)) return false;
   std::istringstream split(line);
   words.clear();
   for (std::string w; split >> w;) words.push_back(w);
@@ -140,9 +128,7 @@ bool plyDataBytes(std::istream& in, std::uint64_t& bytes) {
  * and a header whose points cannot fit in the rest of the file.
  */
 void checkClaim(const std::string& path, const std::string& ext) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0) return;  // PCL's reader reports it
-  if (!S_ISREG(st.st_mode)) throw ToolError(kExitInput, "'" + path + "' is not a regular file");
+  requireRegularFile(path, "the point cloud");
   std::ifstream in(path, std::ios::binary);
   if (!in) return;
   std::uint64_t needed = 0;

@@ -50,11 +50,13 @@ void printHelp(const char* prog) {
 
 /** Poses from a file: tx ty tz qw qx qy qz per line, as a PCD VIEWPOINT. */
 std::vector<Eigen::Affine3f> readPoses(const std::string& path) {
+  requireRegularFile(path, "the pose file");
   std::ifstream in(path);
   if (!in) throw ToolError(kExitInput, "cannot read the pose file '" + path + "'");
   std::vector<Eigen::Affine3f> poses;
   std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
+  int number = 1;
+  for (; readLine(in, line, 4096); ++number) {
     const std::size_t hash = line.find('#');
     if (hash != std::string::npos) line.erase(hash);
     std::istringstream fields(line);
@@ -69,13 +71,15 @@ std::vector<Eigen::Affine3f> readPoses(const std::string& path) {
       ok = *end == '\0' && std::isfinite(v[i]);
     }
     if (!ok)
-      throw ToolError(kExitInput,
-                      path + ":" + std::to_string(number) + ": expected 7 numbers: tx ty tz qw qx qy qz");
+      throw ToolError(kExitInput, path + ":" + std::to_string(number) +
+                                      ": expected 7 finite numbers: tx ty tz qw qx qy qz");
     const Eigen::Quaternionf q{float(v[3]), float(v[4]), float(v[5]), float(v[6])};
     if (!(q.norm() > 1e-6f))
       throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": a zero quaternion");
     poses.push_back(Eigen::Translation3f(float(v[0]), float(v[1]), float(v[2])) * q.normalized());
   }
+  if (!in.eof())
+    throw ToolError(kExitInput, path + ":" + std::to_string(number) + ": a line that never ends");
   return poses;
 }
 

@@ -112,6 +112,22 @@ void requireWritableDirectory(const std::string& file) {
     throw ToolError(kExitInput, "cannot write '" + file + "': the directory '" + dir + "' is not writable");
 }
 
+void requireRegularFile(const std::string& path, const std::string& what) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) throw ToolError(kExitInput, "cannot read " + what + " '" + path + "'");
+  if (!S_ISREG(st.st_mode)) throw ToolError(kExitInput, what + " '" + path + "' is not a regular file");
+}
+
+bool readLine(std::istream& in, std::string& line, std::size_t max_chars) {
+  line.clear();
+  for (int c; (c = in.get()) != '\n';) {
+    if (c == std::char_traits<char>::eof()) return !line.empty();
+    if (line.size() == max_chars) return false;
+    line.push_back(char(c));
+  }
+  return true;
+}
+
 bool isMapFile(const std::string& path) {
   const std::string ext = extension(path);
   return ext == ".fot" || ext == ".bt" || ext == ".ot";

@@ -61,6 +61,18 @@ std::string extension(const std::string& path);
  */
 void requireWritableDirectory(const std::string& file);
 
+/**
+ * Throws ToolError (exit 2) naming `what` unless `path` is a regular file: a device may never end, and
+ * opening a FIFO would wait for a writer.
+ */
+void requireRegularFile(const std::string& path, const std::string& what);
+
+/**
+ * The next line of a text file, without its end. False at the end of the input, and for a line longer than
+ * max_chars, which no file the tools read holds (then the stream is not at its end).
+ */
+bool readLine(std::istream& in, std::string& line, std::size_t max_chars);
+
 /** Reads a .fot, .bt or .ot map. */
 pcl::fot::FastOctTree loadMap(const std::string& path);
 
