@@ -22,7 +22,7 @@ PartCache::PartCache(const FastOctTree& tree, CellState state)
       state_(state),
       cells_(tree),
       mask_(slotsFor(tree.poolWords(), kMaxSlots) - 1),
-      tags_(mask_ + 1, Tag{{0, 0, 0}, 0}),
+      tags_(mask_ + 1, Tag{{0, 0, 0}, Held::Nothing}),
       words_(new std::uint64_t[(mask_ + 1) * Part::kWords]) {}
 
 void PartCache::read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Part& out) {
@@ -48,13 +48,13 @@ const std::uint64_t* PartCache::part(std::uint32_t x, std::uint32_t y, std::uint
   const std::size_t slot = ((x >> 3) * 0x9E3779B1u ^ (y >> 3) * 0x85EBCA77u ^ (z >> 3) * 0xC2B2AE3Du) & mask_;
   Tag& tag = tags_[slot];
   std::uint64_t* bits = words_.get() + slot * Part::kWords;
-  if (!tag.held || tag.corner[0] != x || tag.corner[1] != y || tag.corner[2] != z) {
+  if (tag.held == Held::Nothing || tag.corner[0] != x || tag.corner[1] != y || tag.corner[2] != z) {
     Part p;
     read(x, y, z, p);
     std::copy(p.bits.begin(), p.bits.end(), bits);
-    tag = Tag{{x, y, z}, std::uint8_t(p.any() ? 2 : 1)};
+    tag = Tag{{x, y, z}, p.any() ? Held::Cells : Held::EmptyPart};
   }
-  return tag.held == 2 ? bits : nullptr;
+  return tag.held == Held::Cells ? bits : nullptr;
 }
 
 template <unsigned Reach>

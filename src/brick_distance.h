@@ -108,9 +108,10 @@ class PartCache {
  private:
   static constexpr std::size_t kMaxSlots = 4096;
   /** Which part a slot holds. Only the tags start zeroed (no part): a slot's words are written when read. */
+  enum class Held : std::uint8_t { Nothing, EmptyPart, Cells };
   struct Tag {
     std::uint32_t corner[3];
-    std::uint8_t held;  // 0: none yet, 1: an empty part, 2: a part with cells
+    Held held;
   };
 
   void read(std::uint32_t x, std::uint32_t y, std::uint32_t z, Part& out);
