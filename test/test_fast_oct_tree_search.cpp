@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <pcl/common/point_tests.h>
@@ -145,8 +146,14 @@ TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
   for (std::size_t i = 1; i < cloud->size(); i += 1003) {
     const PointXYZ& q = (*cloud)[i];
     if (!pcl::isFinite(q)) {
-      EXPECT_EQ(ours.nearestKSearch(q, 1, b, db), 0) << "a NaN query gets no results";
-      EXPECT_TRUE(b.empty());
+      EXPECT_EQ(ours.nearestKSearch(q, 3, b, db), 0) << "a NaN query gets no results";
+      // The placeholder PCL's registration reads unchecked: a point of the subset, infinitely far.
+      ASSERT_EQ(b.size(), 1u);
+      EXPECT_EQ(b[0] % 3, 0);
+      EXPECT_TRUE(pcl::isFinite((*cloud)[b[0]]));
+      EXPECT_EQ(db, std::vector<float>{std::numeric_limits<float>::infinity()});
+      EXPECT_EQ(ours.radiusSearch(q, 0.5, b, db), 0);
+      EXPECT_TRUE(b.empty() && db.empty());
       continue;
     }
     ASSERT_EQ(ours.nearestKSearch(q, 3, b, db), 3);

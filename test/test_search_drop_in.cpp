@@ -44,6 +44,48 @@ TEST(SearchDropIn, IcpRecoversAKnownTransform) {
 }
 
 /**
+ * An organised Kinect frame, its NaN points kept, registered onto its moved finite points. KdTreeFLANN
+ * asserts on a NaN query; PCL's correspondence estimation reads our placeholder at an infinite distance
+ * and passes over the point, so ICP works on the finite points alone.
+ */
+TEST(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
+  const Cloud::Ptr frame = pcl_fot_test::loadScan("kinect_capture0001.pcd");
+  Cloud::Ptr organised(new Cloud(frame->width / 4, frame->height / 4)), finite(new Cloud), target(new Cloud);
+  for (std::uint32_t r = 0; r < organised->height; ++r)
+    for (std::uint32_t c = 0; c < organised->width; ++c) (*organised)(c, r) = (*frame)(4 * c, 4 * r);
+  organised->is_dense = false;
+  for (const PointXYZ& p : *organised)
+    if (pcl::isFinite(p)) finite->push_back(p);
+  ASSERT_GT(organised->size() - finite->size(), 1000u) << "the frame has NaN points";
+  const Eigen::Affine3f truth =
+      Eigen::Translation3f(0.03f, -0.02f, 0.01f) * Eigen::AngleAxisf(0.02f, Eigen::Vector3f::UnitY());
+  pcl::transformPointCloud(*finite, *target, truth);
+
+  auto align = [&](const Cloud::Ptr& source, double& fitness) {
+    pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
+    icp.setSearchMethodTarget(Search::Ptr(new Search(0.02)));
+    icp.setInputSource(source);
+    icp.setInputTarget(target);
+    icp.setMaximumIterations(50);
+    icp.setTransformationEpsilon(1e-10);
+    icp.setMaxCorrespondenceDistance(0.2);
+    Cloud aligned;
+    icp.align(aligned);
+    EXPECT_TRUE(icp.hasConverged());
+    fitness = icp.getFitnessScore();
+    return Eigen::Matrix4f(icp.getFinalTransformation());
+  };
+  double fitness_organised = 0, fitness_finite = 0;
+  const Eigen::Matrix4f with_nan = align(organised, fitness_organised);
+  const Eigen::Matrix4f without = align(finite, fitness_finite);
+  ASSERT_TRUE(with_nan.allFinite());
+  EXPECT_TRUE(with_nan.isApprox(without, 1e-6f)) << with_nan << "\nagainst\n" << without;
+  EXPECT_LT((with_nan.block<3, 1>(0, 3) - truth.translation()).norm(), 0.005);
+  EXPECT_TRUE(std::isfinite(fitness_organised));
+  EXPECT_NEAR(fitness_organised, fitness_finite, 1e-9);
+}
+
+/**
  * The same neighbours give the same normals. Two things are ambiguous by nature and left out: a point whose
  * k-th and (k+1)-th neighbours lie at exactly the same distance (FLANN and we may each keep either), and for
  * radius searches a neighbour exactly on the sphere (KdTreeFLANN keeps d < float(r²), ours d <= r², as

@@ -32,8 +32,12 @@ class PointIndex {
   void build(const float* xyz, std::size_t count, std::size_t stride_bytes,
              const std::int32_t* subset = nullptr, std::size_t subset_size = 0);
 
-  /** Points indexed. */
-  std::size_t size() const { return index_.size(); }
+  /** Points indexed: the finite ones of those given to build. */
+  std::size_t size() const { return index_.size() + outliers_index_.size(); }
+  /** The index, as given to build, of one point indexed; -1 if none is. */
+  std::int32_t anyPoint() const {
+    return !index_.empty() ? index_.front() : !outliers_index_.empty() ? outliers_index_.front() : -1;
+  }
   double resolution() const { return resolution_; }
   const FastOctTree& tree() const { return tree_; }
 

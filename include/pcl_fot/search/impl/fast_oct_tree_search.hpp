@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 
 #include <pcl/console/print.h>
 
@@ -63,7 +64,14 @@ int FastOctTreeSearch<PointT>::nearestKSearch(const PointT& point, int k, Indice
     k_sqr_distances.clear();
     return 0;
   }
-  return int(index_.nearestK(q, std::size_t(k), metric_, k_indices, k_sqr_distances));
+  const int found = int(index_.nearestK(q, std::size_t(k), metric_, k_indices, k_sqr_distances));
+  if (found == 0 && index_.size() != 0) {
+    // Only a query that is not finite finds nothing. PCL's correspondence estimation and fitness score read
+    // the first result without the count: one at an infinite distance makes them pass over the point.
+    k_indices.assign(1, index_.anyPoint());
+    k_sqr_distances.assign(1, std::numeric_limits<float>::infinity());
+  }
+  return found;
 }
 
 template <typename PointT>
