@@ -16,6 +16,31 @@ using pcl::PointXYZ;
 using Cloud = pcl::PointCloud<PointXYZ>;
 using Search = pcl::fot::search::FastOctTreeSearch<PointXYZ>;
 
+namespace {
+
+struct Registration {
+  bool converged;
+  Eigen::Matrix4f transformation;
+  double fitness;
+};
+
+/** ICP of source onto target with our search on the target, `cell` metres. */
+Registration registerWithOurSearch(const Cloud::Ptr& source, const Cloud::Ptr& target, double cell,
+                                   double max_correspondence_distance) {
+  pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
+  icp.setSearchMethodTarget(Search::Ptr(new Search(cell)));
+  icp.setInputSource(source);
+  icp.setInputTarget(target);
+  icp.setMaximumIterations(100);
+  icp.setTransformationEpsilon(1e-10);
+  icp.setMaxCorrespondenceDistance(max_correspondence_distance);
+  Cloud aligned;
+  icp.align(aligned);
+  return {icp.hasConverged(), icp.getFinalTransformation(), icp.getFitnessScore()};
+}
+
+}  // namespace
+
 TEST(SearchDropIn, IcpRecoversAKnownTransform) {
   Cloud::Ptr target(new Cloud), source(new Cloud);
   pcl::VoxelGrid<PointXYZ> grid;
@@ -26,21 +51,13 @@ TEST(SearchDropIn, IcpRecoversAKnownTransform) {
       Eigen::Translation3f(0.25f, -0.15f, 0.05f) * Eigen::AngleAxisf(0.06f, Eigen::Vector3f::UnitZ());
   pcl::transformPointCloud(*target, *source, truth.inverse());
 
-  pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
-  icp.setSearchMethodTarget(Search::Ptr(new Search(0.1)));
-  icp.setInputSource(source);
-  icp.setInputTarget(target);
-  icp.setMaximumIterations(100);
-  icp.setTransformationEpsilon(1e-10);
-  icp.setMaxCorrespondenceDistance(1.0);
-  Cloud aligned;
-  icp.align(aligned);
-  ASSERT_TRUE(icp.hasConverged());
-  const Eigen::Matrix4f error = icp.getFinalTransformation() * truth.inverse().matrix();
+  const Registration r = registerWithOurSearch(source, target, 0.1, 1.0);
+  ASSERT_TRUE(r.converged);
+  const Eigen::Matrix4f error = r.transformation * truth.inverse().matrix();
   EXPECT_LT((error.block<3, 1>(0, 3)).norm(), 0.01) << "translation recovered within 1 cm";
   EXPECT_LT(Eigen::AngleAxisf(Eigen::Matrix3f(error.block<3, 3>(0, 0))).angle(), 0.002)
       << "rotation within 0.1°";
-  EXPECT_LT(icp.getFitnessScore(), 1e-4);
+  EXPECT_LT(r.fitness, 1e-4);
 }
 
 /**
@@ -61,28 +78,16 @@ TEST(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
       Eigen::Translation3f(0.03f, -0.02f, 0.01f) * Eigen::AngleAxisf(0.02f, Eigen::Vector3f::UnitY());
   pcl::transformPointCloud(*finite, *target, truth);
 
-  auto align = [&](const Cloud::Ptr& source, double& fitness) {
-    pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
-    icp.setSearchMethodTarget(Search::Ptr(new Search(0.02)));
-    icp.setInputSource(source);
-    icp.setInputTarget(target);
-    icp.setMaximumIterations(50);
-    icp.setTransformationEpsilon(1e-10);
-    icp.setMaxCorrespondenceDistance(0.2);
-    Cloud aligned;
-    icp.align(aligned);
-    EXPECT_TRUE(icp.hasConverged());
-    fitness = icp.getFitnessScore();
-    return Eigen::Matrix4f(icp.getFinalTransformation());
-  };
-  double fitness_organised = 0, fitness_finite = 0;
-  const Eigen::Matrix4f with_nan = align(organised, fitness_organised);
-  const Eigen::Matrix4f without = align(finite, fitness_finite);
-  ASSERT_TRUE(with_nan.allFinite());
-  EXPECT_TRUE(with_nan.isApprox(without, 1e-6f)) << with_nan << "\nagainst\n" << without;
-  EXPECT_LT((with_nan.block<3, 1>(0, 3) - truth.translation()).norm(), 0.005);
-  EXPECT_TRUE(std::isfinite(fitness_organised));
-  EXPECT_NEAR(fitness_organised, fitness_finite, 1e-9);
+  const Registration with_nan = registerWithOurSearch(organised, target, 0.02, 0.2);
+  const Registration without = registerWithOurSearch(finite, target, 0.02, 0.2);
+  ASSERT_TRUE(with_nan.converged && without.converged);
+  ASSERT_TRUE(with_nan.transformation.allFinite());
+  EXPECT_TRUE(with_nan.transformation.isApprox(without.transformation, 1e-6f))
+      << with_nan.transformation << "\nagainst\n"
+      << without.transformation;
+  EXPECT_LT((with_nan.transformation.block<3, 1>(0, 3) - truth.translation()).norm(), 0.005);
+  EXPECT_TRUE(std::isfinite(with_nan.fitness));
+  EXPECT_NEAR(with_nan.fitness, without.fitness, 1e-9);
 }
 
 /**
