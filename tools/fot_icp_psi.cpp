@@ -1,5 +1,6 @@
 // fot_icp_psi: runs pcl::IterativeClosestPoint and scores every iteration with ψ, next to ICP's own fitness.
 #include <algorithm>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -47,10 +48,17 @@ void printHelp(const char* prog) {
       prog, prog);
 }
 
-/** ICP's voxel-grid downsampling, NaN points dropped. A cloud without finite points is refused: PCL's
- * ICP would take it and then crash in getFitnessScore. */
-Cloud::Ptr downsampled(const std::string& file, double leaf) {
-  Cloud::Ptr cloud = loadCloud(file);
+/**
+ * A scan's finite points, downsampled with a voxel grid if leaf > 0. PCL's ICP must not see the NaN points
+ * of an organised cloud (its kd-tree asserts on them), nor a cloud without finite points (it would crash in
+ * getFitnessScore).
+ */
+Cloud::Ptr registrationInput(const std::string& file, double leaf) {
+  const Cloud::Ptr loaded = loadCloud(file);
+  Cloud::Ptr cloud(new Cloud);
+  std::copy_if(loaded->begin(), loaded->end(), std::back_inserter(*cloud),
+               [](const pcl::PointXYZ& p) { return pcl::isFinite(p); });
+  if (cloud->empty()) throw ToolError(kExitInput, "'" + file + "' has no finite points to register");
   if (leaf > 0) {
     Cloud::Ptr filtered(new Cloud);
     pcl::VoxelGrid<pcl::PointXYZ> grid;
@@ -59,8 +67,6 @@ Cloud::Ptr downsampled(const std::string& file, double leaf) {
     grid.filter(*filtered);
     cloud = filtered;
   }
-  if (std::none_of(cloud->begin(), cloud->end(), [](const pcl::PointXYZ& p) { return pcl::isFinite(p); }))
-    throw ToolError(kExitInput, "'" + file + "' has no finite points to register");
   return cloud;
 }
 
@@ -86,8 +92,8 @@ int main(int argc, char** argv) {
     args.getPositive("-max_corr", max_corr);
     if (args.get("-iterations", iterations) && iterations < 1)
       throw ToolError(kExitUsage, "option -iterations must be at least 1");
-    const Cloud::Ptr source = downsampled(args.positional()[0], leaf),
-                     target = downsampled(args.positional()[1], leaf);
+    const Cloud::Ptr source = registrationInput(args.positional()[0], leaf),
+                     target = registrationInput(args.positional()[1], leaf);
     const Eigen::Matrix4f initial = (Eigen::Translation3f(guess[0], guess[1], guess[2]) *
                                      Eigen::AngleAxisf(guess[3], Eigen::Vector3f::UnitZ()))
                                         .matrix();
