@@ -83,7 +83,7 @@ struct BitCube {
     }
     for (unsigned o = 0; o < 8; ++o) {
       const NodeWord child = words[node::childBase(w) + o];
-      if (node::isBitmap(child) && node::octantMask(child, state) == 0) continue;  // most, in sparse maps
+      if (node::isBitmap(child) && !node::holds(child, state)) continue;  // most, in sparse maps
       setFromWord(words, child, level - 1, x + (o & 1u) * half, y + ((o >> 1) & 1u) * half,
                   z + (o >> 2) * half, state);
     }

@@ -37,7 +37,7 @@ void collectPieces(const NodeWord* words, NodeWord w, unsigned level, std::uint3
     return;
   }
   if (level <= detail::kBrickLevel) {
-    if (!node::isBitmap(w) || node::octantMask(w, v) != 0) out.push_back(Piece{x, y, z, level, w});
+    if (!node::isBitmap(w) || node::holds(w, v)) out.push_back(Piece{x, y, z, level, w});
     return;
   }
   const std::uint32_t half = std::uint32_t(1) << (level - 1);

@@ -115,7 +115,7 @@ class NeighbourWalk {
     std::uint32_t mask = 0;
     for (unsigned o = 0; o < 8; ++o) {
       const NodeWord child = words_[first + o];
-      if (!node::isBitmap(child) || node::octantMask(child, target_) != 0) mask |= 1u << o;
+      if (!node::isBitmap(child) || node::holds(child, target_)) mask |= 1u << o;
     }
     return mask;
   }

@@ -108,6 +108,21 @@ constexpr std::uint32_t octantMask(NodeWord w, CellState s) {
   }
 }
 
+/**
+ * Whether any octant of a bitmap word holds `s`. Occupied (binary 10) and free (01) are each one bit of
+ * every pair, so for them this is a single test, where the searches ask it of every child they pass.
+ */
+constexpr bool holds(NodeWord w, CellState s) {
+  switch (s) {
+    case CellState::Occupied:
+      return (w & (0xAAAAu << kStateShift)) != 0;
+    case CellState::Free:
+      return (w & (0x5555u << kStateShift)) != 0;
+    default:
+      return octantMask(w, s) != 0;
+  }
+}
+
 }  // namespace node
 }  // namespace fot
 }  // namespace pcl
