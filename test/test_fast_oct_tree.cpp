@@ -124,6 +124,13 @@ TEST(NodeWord, EncodingIsOneWordWithTagBit) {
     EXPECT_TRUE(node::isUniform(node::uniform(s)));
     EXPECT_EQ(node::uniformState(node::uniform(s)), s);
   }
+  // Every bitmap: holds() agrees with the octant mask.
+  for (std::uint32_t code = 0; code < 6561; ++code) {  // 3^8 assignments of states to octants
+    NodeWord b = node::uniform(CellState::Unknown);
+    for (unsigned o = 0, c = code; o < 8; ++o, c /= 3) b = node::withState(b, o, CellState(c % 3));
+    for (CellState s : {CellState::Unknown, CellState::Free, CellState::Occupied})
+      ASSERT_EQ(node::holds(b, s), node::octantMask(b, s) != 0) << std::hex << b;
+  }
 }
 
 TEST(FastOctTree, RejectsBadResolution) {
