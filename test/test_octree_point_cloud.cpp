@@ -67,6 +67,15 @@ void expectSameState(Reference& ref, const Ours& ours) {
   EXPECT_TRUE(it == ref.leaf_depth_end());
   EXPECT_TRUE(jt == ours.leaf_depth_end());
   EXPECT_EQ(n, ref.getLeafCount());
+
+  n = 0;
+  auto bt = ours.leaf_breadth_begin();
+  for (auto rt = ref.leaf_breadth_begin(); rt != ref.leaf_breadth_end(); ++rt, ++bt, ++n) {
+    ASSERT_TRUE(bt != ours.leaf_breadth_end());
+    ASSERT_EQ(rt.getCurrentOctreeKey(), bt.getCurrentOctreeKey()) << "breadth-first leaf " << n;
+  }
+  EXPECT_TRUE(bt == ours.leaf_breadth_end());
+  EXPECT_EQ(n, ref.getLeafCount());
 }
 
 /** Every cloud point and random points around the box, through all three overloads. */

@@ -73,6 +73,8 @@ class OctreePointCloud {
   using ConstLeafNodeIterator = LeafIterator;
   using LeafNodeDepthFirstIterator = LeafIterator;
   using ConstLeafNodeDepthFirstIterator = LeafIterator;
+  using LeafNodeBreadthFirstIterator = LeafIterator;
+  using ConstLeafNodeBreadthFirstIterator = LeafIterator;
 
   /** Throws std::invalid_argument for a resolution VoxelGrid refuses (PCL asserts). */
   OctreePointCloud(const double resolution_arg);
@@ -139,6 +141,11 @@ class OctreePointCloud {
 
   LeafIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const;
   LeafIterator leaf_depth_end() const;
+  /** Every leaf lies at the full depth, so breadth-first order is depth-first order, as in pcl::octree. */
+  LeafIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
+    return leaf_depth_begin(max_depth_arg);
+  }
+  LeafIterator leaf_breadth_end() const { return leaf_depth_end(); }
 
   std::size_t getLeafCount() const { return std::size_t(tree_.getOccupiedCount()); }
   /** The branch nodes pcl::octree would hold for these voxels, its root included. */
