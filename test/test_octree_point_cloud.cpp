@@ -220,6 +220,22 @@ TEST(OctreePointCloud, AddPointToCloudAndDeleteTree) {
   ref.setOccupiedVoxelsAtPointsFromCloud(source);
   ours.setOccupiedVoxelsAtPointsFromCloud(source);
   expectSameState(ref, ours);
+
+  // Points of the input cloud by index (PCL's tree would take a NaN point into its box: finite ones only).
+  Reference ref2(0.03);
+  Ours ours2(0.03);
+  ref2.setInputCloud(source);
+  ours2.setInputCloud(source);
+  auto ja = std::make_shared<pcl::Indices>(), jb = std::make_shared<pcl::Indices>();
+  for (pcl::uindex_t i = 0; i < source->size(); i += 13) {
+    if (!pcl::isFinite((*source)[i])) continue;
+    ref2.addPointFromCloud(i, ja);
+    ours2.addPointFromCloud(i, jb);
+  }
+  ours2.addPointFromCloud(pcl::uindex_t(source->size()), jb);  // refused: nothing added, no index
+  EXPECT_GT(ja->size(), 1000u);
+  EXPECT_EQ(*ja, *jb);
+  expectSameState(ref2, ours2);
 }
 
 namespace {

@@ -93,6 +93,8 @@ class OctreePointCloud {
   /** Adds every finite point of the input cloud (or of its indices). */
   void addPointsFromInputCloud();
   /** Appends the point to the input cloud (which must be cloud_arg) and adds it. */
+  /** Adds the input cloud's point point_idx_arg and appends the index to indices_arg, if given. */
+  void addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg);
   void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg);
   void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg, IndicesPtr indices_arg);
   void setOccupiedVoxelAtPoint(const PointT& point_arg);

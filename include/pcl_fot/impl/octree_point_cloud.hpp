@@ -203,6 +203,17 @@ void OctreePointCloud<PointT>::addPointsFromInputCloud() {
 }
 
 template <typename PointT>
+void OctreePointCloud<PointT>::addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg) {
+  if (!input_ || point_idx_arg >= input_->size()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::addPointFromCloud] Index %zu is outside the input cloud.\n",
+              static_cast<std::size_t>(point_idx_arg));
+    return;
+  }
+  setOccupiedVoxelAtPoint((*input_)[point_idx_arg]);
+  if (indices_arg) indices_arg->push_back(static_cast<index_t>(point_idx_arg));
+}
+
+template <typename PointT>
 void OctreePointCloud<PointT>::addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg) {
   if (cloud_arg != input_) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointToCloud] The cloud must be the input cloud.\n");
