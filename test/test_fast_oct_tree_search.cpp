@@ -215,5 +215,15 @@ TEST(FastOctTreeSearch, EmptyAndDegenerateClouds) {
   EXPECT_EQ(b[0], 1);
   ASSERT_EQ(ours.nearestKSearch(PointXYZ(1, 0, 0), 2, b, db), 2);
   EXPECT_EQ(b[0], 0);
+  // Beyond 2^29 cells either side of the centre: searched exhaustively, still counted and found.
+  far->push_back(PointXYZ(-1e9f, 0, 0));
+  far->push_back(PointXYZ(0, 1e9f, 0));
+  ours.setInputCloud(far);
+  EXPECT_EQ(ours.getPointIndex().size(), 4u);
+  ASSERT_EQ(ours.nearestKSearch(PointXYZ(0, 9e8f, 0), 1, b, db), 1);
+  EXPECT_EQ(b[0], 3);
+  EXPECT_EQ(ours.nearestKSearch(PointXYZ(std::nanf(""), 0, 0), 1, b, db), 0);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_TRUE(b[0] >= 0 && b[0] < 4);
   EXPECT_THROW(Search(0.0), std::invalid_argument);
 }
