@@ -9,9 +9,8 @@
 namespace fot_tools {
 
 /**
- * Reads x, y, z (float or double) of a .pcd or .ply point cloud, keeping its VIEWPOINT; PCL's own messages
- * are silenced. Before PCL's reader runs, which allocates whatever the header claims, the claim is checked
- * against the file's size. Throws ToolError with one line for a file it cannot use.
+ * Reads x, y, z (float or double) of a .pcd or .ply point cloud and its sensor pose, with the parsers of
+ * cloud_parser.h. Throws ToolError with one line for a file it cannot use.
  */
 pcl::PointCloud<pcl::PointXYZ>::Ptr loadCloud(const std::string& path);
 

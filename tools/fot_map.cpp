@@ -30,10 +30,11 @@ namespace {
 void printHelp(const char* prog) {
   print_info(
       "Builds a FastOctTree occupancy map from range scans with ray tracing: the cells along every ray\n"
-      "become free, the endpoints occupied. Each scan's pose (sensor in the map frame) is its VIEWPOINT,\n"
-      "or a line of the pose file. Without scans, it maps the embedded default: a synthetic furnished room\n"
-      "seen by a depth camera from six poses. Scans whose rays would cross more than 1e10 cells, which\n"
-      "usually means a missing pose, are refused before any tracing (cut them with -max_range).\n\n"
+      "become free, the endpoints occupied. Each scan's pose (sensor in the map frame) is its VIEWPOINT\n"
+      "(a PLY file's camera element), or a line of the pose file. Without scans, it maps the embedded\n"
+      "default: a synthetic furnished room seen by a depth camera from six poses. Scans whose rays would\n"
+      "cross more than 1e10 cells, which usually means a missing pose, are refused before any tracing\n"
+      "(cut them with -max_range).\n\n"
       "Syntax: %s [options] [scan1.pcd|.ply scan2.pcd ...]\n\n"
       "  -res <m>          voxel edge length in metres (default: 0.05)\n"
       "  -poses <file>     one pose per scan, in order: tx ty tz qw qx qy qz per line ('#' comments)\n"
