@@ -71,7 +71,6 @@ class PointIndex::Policy {
          double limit, std::vector<Hit>& heap)
       : index_(index),
         q_{q[0], q[1], q[2]},
-        qc_{qc[0], qc[1], qc[2]},
         metric_(metric),
         k_(k),
         limit_(limit),
@@ -79,15 +78,21 @@ class PointIndex::Policy {
         heap_(heap) {
     const double res = index.tree_.getGrid().resolution();
     scale_ = metric == Metric::Euclidean ? res * res : res;
+    const double slack =
+        0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / res;
+    for (int a = 0; a < 3; ++a) low_[a] = qc[a] - slack, high_[a] = qc[a] + slack;
   }
 
-  // Bounds are shaded down a little: a float distance may come out up to a few ulps below the exact one.
+  // Bounds are shaded down a little. Gaps in cells are measured from the query widened by a few ulps of its
+  // cell coordinates, as much as its cell and a point's may be off by in rounding (a point exactly at the
+  // query may lie in the next cell), and by 1e-22 m, below which float squares lose their precision among
+  // denormals. Then a float distance may come out up to a few ulps below the exact one.
   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const {
     const double half = double(std::uint64_t(1) << child_level);
     for (int a = 0; a < 3; ++a) {
       const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
-      const double below = std::max({low - qc_[a], qc_[a] - mid, 0.0}),
-                   above = std::max({mid - qc_[a], qc_[a] - high, 0.0});
+      const double below = std::max({low - high_[a], low_[a] - mid, 0.0}),
+                   above = std::max({mid - high_[a], low_[a] - high, 0.0});
       gap[a][0] = shade((metric_ == Metric::Euclidean ? below * below : below) * scale_);
       gap[a][1] = shade((metric_ == Metric::Euclidean ? above * above : above) * scale_);
     }
@@ -98,7 +103,7 @@ class PointIndex::Policy {
     double nearest = std::numeric_limits<double>::infinity();
     for (int a = 0; a < 3; ++a) {
       const double box_lo = double(tree_coord::toKey(lo[a]));
-      nearest = std::min({nearest, qc_[a] - box_lo, box_lo + side - qc_[a]});
+      nearest = std::min({nearest, low_[a] - box_lo, box_lo + side - high_[a]});
     }
     nearest = std::max(nearest, 0.0);
     return shade((metric_ == Metric::Euclidean ? nearest * nearest : nearest) * scale_);
@@ -184,8 +189,8 @@ class PointIndex::Policy {
 
   const PointIndex& index_;
   float q_[3];
-  double qc_[3];  // the query in cells from the grid origin
-  double scale_;  // cell units to the metric's units
+  double low_[3], high_[3];  // the query in cells from the grid origin, widened by its rounding
+  double scale_;             // cell units to the metric's units
   Metric metric_;
   std::size_t k_;
   double limit_;
@@ -314,7 +319,8 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   }
 
   // The walk starts in the query's cell; any nearby cell would give the same, exact, answer, so the cell
-  // comes from the reciprocal, clamped for far queries, rather than from pointToKey's exact division.
+  // comes from the reciprocal, clamped for far queries, rather than from pointToKey's exact division. The
+  // boxes' gaps allow for the difference (Policy's slack).
   const VoxelGrid& grid = tree_.getGrid();
   const double inverse = 1.0 / grid.resolution();
   double qc[3];
