@@ -133,9 +133,14 @@ void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, uns
       }
       return;
     }
+    if (empty()) {  // nothing to keep: the cube becomes the root (growing to a corner would re-anchor)
+      ++version_;
+      root_level_ = level;
+      base_ = {x, y, z};
+    }
     const std::uint32_t far = (std::uint32_t(1) << level) - 1;
     for (const std::uint32_t c : {std::uint32_t(0), far})  // both corners: the root must hold the whole cube
-      if (empty() || (((x + c) ^ base_[0]) | ((y + c) ^ base_[1]) | ((z + c) ^ base_[2])) >> root_level_)
+      if ((((x + c) ^ base_[0]) | ((y + c) ^ base_[1]) | ((z + c) ^ base_[2])) >> root_level_)
         growToCover(x + c, y + c, z + c);
   }
   const std::uint64_t cells = node::cellsIn(1, level);

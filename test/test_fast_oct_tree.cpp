@@ -503,6 +503,22 @@ TEST(FastOctTree, BoxesAgainstHashModel) {
   checkAgainstModel(tree, model);
 }
 
+TEST(FastOctTree, ABoxOnAFreshTreeAnywhere) {
+  // A fresh tree's first box may be a whole cube away from its root: the root must become that cube, not
+  // grow to one corner and then re-anchor at the other (a 7-cell box at key 110 threw MemoryLimitError).
+  for (std::int32_t at : {0, 1, 110, 112, -77, 4096, kMaxKey - 20, kMinKey})
+    for (std::int32_t side = 1; side <= 12; ++side)
+      for (CellState s : {CellState::Free, CellState::Occupied}) {
+        FastOctTree boxed(0.1), celled(0.1);
+        const Key lo{at, at, at}, hi{at + side - 1, at + side - 1, at + side - 1};
+        ASSERT_NO_THROW(boxed.setBox(lo, hi, s)) << "at " << at << ", side " << side;
+        for (std::int32_t z = lo.z; z <= hi.z; ++z)
+          for (std::int32_t y = lo.y; y <= hi.y; ++y)
+            for (std::int32_t x = lo.x; x <= hi.x; ++x) celled.setCell(Key{x, y, z}, s);
+        ASSERT_TRUE(boxed == celled) << "at " << at << ", side " << side;
+      }
+}
+
 TEST(FastOctTree, HugeBoxesCostTheirSurface) {
   FastOctTree tree(0.1);
   const Key lo{-200, -210, -190}, hi{311, 301, 321};  // 512³ cells, not aligned

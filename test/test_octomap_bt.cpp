@@ -70,6 +70,23 @@ TEST(OctoMapBt, ImportedOctoMapsHaveOctoMapsCells) {
   expectSameCells(*readWithOctoMap(io::encodeBt(ours)), ours);
 }
 
+TEST(OctoMapBt, PrunedCubesFarFromTheOriginImport) {
+  // A cube of free space 11 m out: OctoMap prunes most of it into inner nodes, which the importer sets as
+  // boxes on a fresh tree. That used to fail with MemoryLimitError.
+  octomap::OcTree om(0.1);
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j)
+      for (int k = 0; k < 8; ++k)
+        om.updateNode(octomap::point3d(11.25f + 0.1f * i, 11.25f + 0.1f * j, 11.25f + 0.1f * k), false);
+  om.updateInnerOccupancy();
+  om.prune();
+  ASSERT_LT(om.getNumLeafNodes(), 512u) << "the cube should have pruned inner nodes";
+  std::ostringstream out;
+  ASSERT_TRUE(om.writeBinaryConst(out));
+  const std::string bt = out.str();
+  expectSameCells(om, io::decodeBt(bt.data(), bt.size(), "cube.bt"));
+}
+
 TEST(OctoMapBt, EveryOccupancyTreeTypeImports) {
   // ColorOcTree and OcTreeStamped write the same .bt body under their own id; OctoMap reads them as OcTrees.
   auto check = [](auto& om) {
