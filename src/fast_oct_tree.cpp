@@ -133,15 +133,13 @@ void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, uns
       }
       return;
     }
-    if (empty()) {  // nothing to keep: the cube becomes the root (growing to a corner would re-anchor)
+    if (empty()) {  // nothing to keep: the cube becomes the root
       ++version_;
       root_level_ = level;
       base_ = {x, y, z};
+    } else {
+      growToCover(x, y, z, level);
     }
-    const std::uint32_t far = (std::uint32_t(1) << level) - 1;
-    for (const std::uint32_t c : {std::uint32_t(0), far})  // both corners: the root must hold the whole cube
-      if ((((x + c) ^ base_[0]) | ((y + c) ^ base_[1]) | ((z + c) ^ base_[2])) >> root_level_)
-        growToCover(x + c, y + c, z + c);
   }
   const std::uint64_t cells = node::cellsIn(1, level);
   ++version_;
@@ -151,19 +149,21 @@ void FastOctTree::setCube(std::uint32_t x, std::uint32_t y, std::uint32_t z, uns
     if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
     return;
   }
-  reserveBlocks(root_level_ - level - 1);
   std::size_t path[kMaxLevel + 1];
   path[root_level_] = 0;
-  for (unsigned l = root_level_; l > level + 1; --l) {
+  unsigned l = root_level_;
+  for (; l > level + 1 && !node::isBitmap(words_[path[l]]); --l)
+    path[l - 1] = node::childBase(words_[path[l]]) + tree_coord::octant(x, y, z, l);
+  if (l > level + 1) {  // from this bitmap word down to the cube's parent, each level takes a block
+    if (node::state(words_[path[l]], tree_coord::octant(x, y, z, l)) == state) return;  // inside such a cube
+    reserveBlocks(l - level - 1);
+  }
+  for (; l > level + 1; --l) {
     const NodeWord w = words_[path[l]];
-    const unsigned o = tree_coord::octant(x, y, z, l);
-    if (node::isBitmap(w)) {
-      if (node::state(w, o) == state) return;  // already inside a uniform cube of this state
-      const std::uint32_t block = allocBlock();
-      for (unsigned i = 0; i < 8; ++i) words_[std::size_t(block) * 8 + i] = node::uniform(node::state(w, i));
-      words_[path[l]] = node::reference(block);
-    }
-    path[l - 1] = node::childBase(words_[path[l]]) + o;
+    const std::size_t first = std::size_t(allocBlock()) * 8;
+    for (unsigned i = 0; i < 8; ++i) words_[first + i] = node::uniform(node::state(w, i));
+    words_[path[l]] = node::reference(std::uint32_t(first / 8));
+    path[l - 1] = first + tree_coord::octant(x, y, z, l);
   }
   const unsigned o = tree_coord::octant(x, y, z, level + 1);
   const NodeWord parent = words_[path[level + 1]];
@@ -234,15 +234,23 @@ void FastOctTree::freeBlock(std::uint32_t block) {
   --live_blocks_;
 }
 
-void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
   ++version_;
   if (empty()) {  // nothing to keep: re-anchor a small root at the key
     root_level_ = 1;
     base_ = {x & ~1u, y & ~1u, z & ~1u};
     return;
   }
-  const unsigned target = tree_coord::commonLevel(x ^ base_[0], y ^ base_[1], z ^ base_[2]);
-  reserveBlocks(target - root_level_);
+  const std::uint32_t far = (std::uint32_t(1) << level) - 1;  // the cube's corners differ in these bits only
+  const unsigned target = tree_coord::commonLevel(((x | far) ^ base_[0]) | (x ^ base_[0]),
+                                                  ((y | far) ^ base_[1]) | (y ^ base_[1]),
+                                                  ((z | far) ^ base_[2]) | (z ^ base_[2]));
+  // Growth takes a block per level, but a uniform root folds into its parent's bitmap for free. The write
+  // then builds the path from the new root down to the cube's parent, below the new root's block if there
+  // is one. Reserving both first keeps a refused write from leaving the root grown.
+  const std::size_t growth = target - root_level_ - (node::isUniform(words_[0]) ? 1 : 0);
+  const std::size_t path = target > level + 1 ? target - level - (growth > 0 ? 2 : 1) : 0;
+  reserveBlocks(growth + path);
   while (root_level_ < target) {
     const NodeWord root = words_[0];
     const unsigned octant = tree_coord::octant(base_[0], base_[1], base_[2], root_level_ + 1);

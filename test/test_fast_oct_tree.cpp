@@ -440,6 +440,51 @@ TEST(FastOctTree, MemoryCapRefusesWritesAndKeepsTheTree) {
   EXPECT_LE(tree.poolWords() * sizeof(NodeWord), 4096u);
 }
 
+TEST(FastOctTree, AWriteRefusedBeyondTheRootLeavesThePoolAsItWas) {
+  // A write beyond the root first grows it, then builds the path down to the cell or cube. Both must fit
+  // the cap before either starts: a refused write used to leave the root grown by up to 30 levels.
+  struct Write {
+    Key lo, hi;
+    bool whole;  // one cell or one aligned cube, refused whole; a box keeps the cubes written before
+  };
+  const std::int32_t aligned = tree_coord::toKey(tree_coord::fromKey(4096) & ~7u),
+                     cube = tree_coord::toKey(tree_coord::fromKey(0) & ~15u);
+  const Write writes[] = {{{-70, 5, 1000}, {-70, 5, 1000}, true},
+                          {{kMaxKey, kMinKey, 0}, {kMaxKey, kMinKey, 0}, true},
+                          {{aligned, 0, 0}, {aligned, 0, 0}, true},
+                          {{aligned, aligned, aligned}, {aligned + 7, aligned + 7, aligned + 7}, true},
+                          {{-3000, 900, 17}, {-2990, 911, 17}, false}};
+  for (bool uniform_root : {false, true})
+    for (const Write& w : writes)
+      for (std::size_t cap = 64; cap <= 2048; cap += 32) {
+        FastOctTree tree(0.1);
+        if (uniform_root)  // an aligned cube: growth folds it into its parent's bitmap without a block
+          tree.setBox(Key{cube, cube, cube}, Key{cube + 15, cube + 15, cube + 15}, CellState::Free);
+        else
+          tree.setCell({3, 2, 1}, CellState::Occupied);
+        ASSERT_EQ(uniform_root, node::isUniform(tree.rootWord()));
+        FastOctTree unlimited = tree;
+        unlimited.setBox(w.lo, w.hi, CellState::Occupied);
+        tree.setMaxMemoryBytes(std::max(cap, tree.poolWords() * sizeof(NodeWord)));
+        const std::vector<NodeWord> pool(tree.words(), tree.words() + tree.poolWords());
+        const unsigned depth = tree.getDepth();
+        try {
+          if (w.lo == w.hi)
+            Accessor(tree).setCell(w.lo, CellState::Occupied);
+          else
+            tree.setBox(w.lo, w.hi, CellState::Occupied);
+          EXPECT_TRUE(tree == unlimited) << "cap " << cap;
+        } catch (const MemoryLimitError&) {
+          EXPECT_GT(unlimited.poolWords() * sizeof(NodeWord), tree.getMaxMemoryBytes())
+              << "refused, though the write fits in " << tree.getMaxMemoryBytes() << " bytes";
+          if (!w.whole) continue;
+          EXPECT_EQ(tree.getDepth(), depth) << "cap " << cap;
+          ASSERT_EQ(tree.poolWords(), pool.size()) << "cap " << cap;
+          EXPECT_TRUE(std::equal(pool.begin(), pool.end(), tree.words())) << "cap " << cap;
+        }
+      }
+}
+
 TEST(FastOctTree, RegionsInABoxAreThoseThatOverlapIt) {
   FastOctTree tree(0.1);
   std::mt19937 rng(31);

@@ -72,7 +72,7 @@ class BasicAccessor {
                         z = tree_coord::fromKey(key.z);
     if (!locate(x, y, z)) {
       if (state == CellState::Unknown) return 0;  // erasing outside the extent changes nothing
-      tree_->growToCover(x, y, z);
+      tree_->growToCover(x, y, z, 0);
       locate(x, y, z);
     }
     const NodeWord w = tree_->words_[path_[bottom_]];

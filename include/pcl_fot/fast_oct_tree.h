@@ -176,8 +176,11 @@ class FastOctTree {
   std::uint32_t allocBlock();
   void freeBlock(std::uint32_t block);
 
-  /** Grows the root until it covers (x, y, z), in tree coordinates. */
-  void growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /**
+   * Grows the root until it covers the aligned cube of 2^level cells per axis at (x, y, z), in tree
+   * coordinates (level 0: one cell), and reserves the blocks that writing the cube then takes.
+   */
+  void growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level);
   /**
    * Expands the bitmap word at path[level] down to level 1 along (x, y, z), filling path[level-1..1].
    * Each new block holds the expanded octant states, so the cells keep their values.
