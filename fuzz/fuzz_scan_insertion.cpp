@@ -1,14 +1,70 @@
 // Fuzz target: ray-traced scan insertion with arbitrary floats: NaN, Inf, huge and denormal values. The
 // input is a resolution choice, a max-range choice, the sensor position and the points. Bad points must be
-// skipped and counted; the tree must come out canonical, the same with and without LineBurstAccess.
+// skipped and counted; the tree must come out canonical, the same with and without LineBurstAccess. Without
+// range limits it must hold exactly the cells of each ray's plain DDA walk, as must a grid around the sensor.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
+#include <pcl_fot/ray_caster.h>
 #include <pcl_fot/scan_insertion.h>
+
+namespace {
+
+using pcl::fot::CellState;
+using pcl::fot::Key;
+
+/**
+ * Without range limits, each ray frees the cells traceSegment walks, and then its end cell is occupied:
+ * the tree, which walks the rays a block at a time, must hold exactly those cells, and a grid around the
+ * sensor the same ones within it.
+ */
+void checkAgainstSegments(const pcl::fot::FastOctTree& tree, const float sensor[3],
+                          const std::vector<float>& xyz, const pcl::fot::ScanStats& stats) {
+  const pcl::fot::VoxelGrid& grid = tree.getGrid();
+  std::unordered_map<Key, CellState, pcl::fot::KeyHash> cells;
+  std::vector<Key> ends;
+  std::size_t rays = 0;
+  for (std::size_t i = 0; i < xyz.size(); i += 3) {
+    Key end;
+    if (!grid.pointToKey(xyz[i], xyz[i + 1], xyz[i + 2], end)) continue;
+    // Rays may step a cell past their ends: both ends keep a cell inside the key range.
+    const auto inside = [](std::int32_t k) { return k > pcl::fot::kMinKey && k < pcl::fot::kMaxKey; };
+    if (!inside(end.x) || !inside(end.y) || !inside(end.z)) continue;
+    ++rays;
+    ends.push_back(end);
+    pcl::fot::traceSegment(grid, sensor, &xyz[i], [&](const Key& k) { cells[k] = CellState::Free; });
+  }
+  for (const Key& k : ends) cells[k] = CellState::Occupied;
+  if (rays != stats.rays) std::abort();
+  std::size_t held = 0;
+  for (CellState s : {CellState::Free, CellState::Occupied})
+    tree.forEachCell(s, [&](const Key& k) {
+      const auto it = cells.find(k);
+      if (it == cells.end() || it->second != s) std::abort();
+      ++held;
+    });
+  if (held != cells.size()) std::abort();
+
+  Key centre;
+  if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], centre)) std::abort();
+  const Key lo{centre.x - 16, centre.y - 16, centre.z - 16};
+  if (!pcl::fot::isValidKey(lo) || !pcl::fot::isValidKey(Key{lo.x + 31, lo.y + 31, lo.z + 31})) return;
+  pcl::fot::FastOccMesh mesh(grid, 32, lo);
+  pcl::fot::insertRays(mesh, sensor, xyz.data(), xyz.size() / 3, 12);
+  for (std::int32_t z = 0; z < 32; ++z)
+    for (std::int32_t y = 0; y < 32; ++y)
+      for (std::int32_t x = 0; x < 32; ++x) {
+        const Key k{lo.x + x, lo.y + y, lo.z + z};
+        if (mesh.getCell(k) != tree.getCell(k)) std::abort();
+      }
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2 + 12) return 0;
@@ -52,6 +108,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (stats.rays + stats.non_finite + stats.out_of_range + stats.too_close != count) std::abort();
   if (stats.occupied > stats.rays) std::abort();
   if (!(with == without)) std::abort();
+  if (options.max_range <= 0.0 && options.min_range == 0.0 && stats.ray_cells < 4'000'000)
+    checkAgainstSegments(with, sensor, xyz, stats);
   if (with.getNodeCount() < 200000) {
     const pcl::fot::FastOctTree rebuilt =
         pcl::fot::FastOctTree::fromCanonicalPool(with.getGrid(), with.canonicalPool());
