@@ -2,18 +2,22 @@
 // the origin or at the edges of the key range), a spacing and a memory cap, then writes cells and boxes of
 // any state, directly and through accessors with and without LineBurstAccess, including keys beyond the
 // range. Afterwards the tree must hold exactly the model's cells: counts, reads, Morton-ordered iteration,
-// regions in a box, canonical form, the canonical pool and a tree written in the reverse order, and the
-// nearest-cell search in both metrics against brute force.
+// regions in a box, canonical form, the canonical pool and a tree written in the reverse order, a round
+// trip through .fot and through OctoMap's .bt, and the nearest-cell search in both metrics against brute
+// force.
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <unordered_map>
 #include <vector>
 
 #include <pcl_fot/accessor.h>
 #include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/io/fot_file.h>
+#include <pcl_fot/io/octomap_bt.h>
 #include <pcl_fot/nearest_neighbor.h>
 
 namespace {
@@ -180,6 +184,21 @@ void checkTree(const FastOctTree& t, const Model& model, const std::vector<Key>&
   const FastOctTree::CanonicalPool pool = t.canonicalPool();
   check(reversed.canonicalPool().words == pool.words);
   check(FastOctTree::fromCanonicalPool(t.getGrid(), pool) == t);
+
+  // Both file formats carry the cells over: .fot any map, .bt those within OctoMap's 65536³ cube.
+  const std::string fot = io::encodeFot(t);
+  check(io::encodeFot(reversed) == fot);
+  check(io::decodeFot(fot.data(), fot.size()) == t);
+  const bool in_octomap = std::all_of(model.begin(), model.end(), [](const auto& kv) {
+    const Key& k = kv.first;
+    return std::min({k.x, k.y, k.z}) >= -32768 && std::max({k.x, k.y, k.z}) <= 32767;
+  });
+  try {
+    const std::string bt = io::encodeBt(t);
+    check(in_octomap && io::decodeBt(bt.data(), bt.size()) == t);
+  } catch (const std::invalid_argument&) {
+    check(!in_octomap);
+  }
 
   checkSearch(t, model, queries);
 }
