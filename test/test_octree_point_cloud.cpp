@@ -422,3 +422,31 @@ TEST(OctreePointCloud, BadInputIsRefusedWithoutHarm) {
                                                  centres);
   EXPECT_LE(centres.size(), 1u);
 }
+
+TEST(OctreePointCloud, APointOnTheBoxsFarFaceIsInItsLastVoxel) {
+  // Padded to a cube of 64 voxels, this box ends 2e-16 m past 0, so x = 0 lies inside it, but
+  // (0 - min_x) / res rounds to 64, one past its last voxel. pcl::octree fails an assertion on it (found by
+  // fuzz_octree_point_cloud); the voxel that holds such a point is the last one.
+  Ours ours(0.05);
+  ours.defineBoundingBox(-2.75, 0.0, 0.0, -0.45, 0.05, 0.05);
+  double box[6];
+  ours.getBoundingBox(box[0], box[1], box[2], box[3], box[4], box[5]);
+  ASSERT_EQ(ours.getTreeDepth(), 6u);
+  ASSERT_GT(box[3], 0.0);
+  ASSERT_EQ(pcl::uindex_t((0.0 - box[0]) / 0.05), 64u) << "the rounding this test is about";
+  const PointXYZ p(0, 0, 0);
+  ours.setOccupiedVoxelAtPoint(p);
+  EXPECT_TRUE(ours.isVoxelOccupiedAtPoint(p));
+  ASSERT_EQ(ours.getLeafCount(), 1u);
+  auto leaf = ours.leaf_depth_begin();
+  EXPECT_EQ(leaf.getCurrentOctreeKey().x, 63u);
+  Eigen::Vector3f lo, hi;
+  ours.getVoxelBounds(leaf, lo, hi);
+  EXPECT_LT(lo.x(), 0.0f);
+  EXPECT_LE(hi.x(), box[3] + 1e-6);
+  Ours::AlignedPointTVector centres;
+  ASSERT_EQ(ours.getOccupiedVoxelCenters(centres), 1u);
+  EXPECT_LT(centres[0].x, box[3]);
+  ours.deleteVoxelAtPoint(p);
+  EXPECT_EQ(ours.getLeafCount(), 0u);
+}

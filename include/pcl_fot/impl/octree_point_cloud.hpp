@@ -72,9 +72,11 @@ void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
 
 template <typename PointT>
 octree::OctreeKey OctreePointCloud<PointT>::pclKey(double x, double y, double z) const {
-  return octree::OctreeKey(static_cast<uindex_t>((x - min_[0]) / resolution_),
-                           static_cast<uindex_t>((y - min_[1]) / resolution_),
-                           static_cast<uindex_t>((z - min_[2]) / resolution_));
+  // A point just inside the box's far face can round to one voxel past it; pcl::octree asserts there.
+  const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << depth_) - 1);
+  return octree::OctreeKey(std::min(static_cast<uindex_t>((x - min_[0]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((y - min_[1]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((z - min_[2]) / resolution_), last));
 }
 
 template <typename PointT>
