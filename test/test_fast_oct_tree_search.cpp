@@ -230,14 +230,22 @@ TEST(FastOctTreeSearch, EmptyAndDegenerateClouds) {
 
 TEST(FastOctTreeSearch, PointsOnCellBoundariesAreFoundAtDistanceZero) {
   // A lattice of 0.25 m: many points lie on cell faces, where the query's cell (from the reciprocal of the
-  // resolution) and the point's (from the division) may differ by one. At 2 cm, a radius of 0 used to miss
-  // 1,560 of these 16,000 points, in either metric. Each point is there twice.
+  // resolution) and the point's (from the division) may differ by one. At 2 cm, PointIndex's radius of 0
+  // used to miss 1,560 of these 16,000 points, in either metric. Each point is there twice.
   Cloud::Ptr lattice(new Cloud);
   for (int copy = 0; copy < 2; ++copy)
     for (int i = -20; i < 20; ++i)
       for (int j = -20; j < 20; ++j)
         for (int k = 0; k < 10; ++k) lattice->push_back(PointXYZ(0.25f * i, 0.25f * j, 1.0f + 0.25f * k));
   const std::size_t n = lattice->size() / 2;
+  pcl::search::KdTree<PointXYZ> flann;
+  flann.setInputCloud(lattice);
+  pcl::search::BruteForce<PointXYZ> brute;
+  brute.setInputCloud(lattice);
+  pcl::Indices none;
+  std::vector<float> no_distances;
+  ASSERT_EQ(flann.radiusSearch((*lattice)[0], 0.0, none, no_distances), 0) << "PCL's rule for a radius of 0";
+  ASSERT_EQ(brute.radiusSearch((*lattice)[0], 0.0, none, no_distances), 0) << "PCL's rule for a radius of 0";
   for (double res : {0.02, 0.05, 0.01}) {
     for (auto metric : {pcl::fot::Metric::Euclidean, pcl::fot::Metric::Manhattan}) {
       Search ours(res);
@@ -246,8 +254,14 @@ TEST(FastOctTreeSearch, PointsOnCellBoundariesAreFoundAtDistanceZero) {
       pcl::Indices b;
       std::vector<float> db;
       for (std::size_t i = 0; i < n; ++i) {
-        ASSERT_EQ(ours.radiusSearch((*lattice)[i], 0.0, b, db), 2) << "point " << i << " at res " << res;
-        EXPECT_EQ(b, (pcl::Indices{pcl::index_t(i), pcl::index_t(i + n)}));
+        const float q[3] = {(*lattice)[i].x, (*lattice)[i].y, (*lattice)[i].z};
+        std::vector<std::int32_t> found;
+        ASSERT_EQ(ours.getPointIndex().radiusSearch(q, 0.0, metric, found, db), 2u)
+            << "point " << i << " at res " << res;
+        EXPECT_EQ(found, (std::vector<std::int32_t>{std::int32_t(i), std::int32_t(i + n)}));
+        // PCL's searches find nothing within a radius of 0, and so does the drop-in.
+        EXPECT_EQ(ours.radiusSearch((*lattice)[i], 0.0, b, db), 0);
+        EXPECT_TRUE(b.empty() && db.empty());
         // The copy's k = 1: a tie at distance 0, which goes to the smaller index.
         ASSERT_EQ(ours.nearestKSearch((*lattice)[i + n], 1, b, db), 1);
         ASSERT_EQ(b[0], pcl::index_t(i)) << "point " << i << " at res " << res;

@@ -77,6 +77,11 @@ int FastOctTreeSearch<PointT>::nearestKSearch(const PointT& point, int k, Indice
 template <typename PointT>
 int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, Indices& k_indices,
                                             std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
+  if (!(radius > 0.0)) {  // as KdTreeFLANN and BruteForce: no point lies within a radius of 0
+    k_indices.clear();
+    k_sqr_distances.clear();
+    return 0;
+  }
   const float q[3] = {point.x, point.y, point.z};
   return int(index_.radiusSearch(q, radius, metric_, k_indices, k_sqr_distances, max_nn));
 }
