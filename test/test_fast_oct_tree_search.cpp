@@ -269,3 +269,41 @@ TEST(FastOctTreeSearch, PointsOnCellBoundariesAreFoundAtDistanceZero) {
     }
   }
 }
+
+TEST(FastOctTreeSearch, AnswersAsKdTreeForAnyIndicesRadiusAndMaxNn) {
+  // A lattice, so that many distances tie; an index subset with repeats and NaN and Inf points in it.
+  std::mt19937 rng(1);
+  std::uniform_int_distribution<int> step(-8, 8);
+  Cloud::Ptr cloud(new Cloud);
+  for (int i = 0; i < 200; ++i)
+    cloud->push_back(PointXYZ(step(rng) * 0.05f, step(rng) * 0.05f, step(rng) * 0.05f));
+  (*cloud)[7].x = std::nanf("");
+  (*cloud)[9].y = std::numeric_limits<float>::infinity();
+  auto subset = std::make_shared<pcl::Indices>();
+  for (pcl::index_t i = 0; i < 200; i += 2) subset->push_back(i);
+  for (pcl::index_t i : {4, 4, 7, 9, 199}) subset->push_back(i);
+  for (bool sorted : {true, false}) {
+    pcl::search::KdTree<PointXYZ> flann(sorted);
+    Search ours(0.05, sorted);
+    flann.setInputCloud(cloud, subset);
+    ours.setInputCloud(cloud, subset);
+    pcl::Indices a, b;
+    std::vector<float> da, db;
+    for (const PointXYZ& q : *cloud) {
+      if (!pcl::isFinite(q)) continue;
+      for (int k : {1, 3, 10, 150, 500}) {
+        ASSERT_EQ(flann.nearestKSearch(q, k, a, da), ours.nearestKSearch(q, k, b, db)) << "k " << k;
+        ASSERT_EQ(da, db) << "k " << k;  // ties may list other indices, at the same distances
+      }
+      // A negative radius finds nothing, as in BruteForce; KdTreeFLANN squares it.
+      ASSERT_EQ(ours.radiusSearch(q, -1.0, b, db), 0);
+      for (double r : {0.0, 0.05, 0.1, 0.3})
+        for (unsigned max_nn : {0u, 1u, 5u}) {
+          ASSERT_EQ(flann.radiusSearch(q, r, a, da, max_nn), ours.radiusSearch(q, r, b, db, max_nn))
+              << "radius " << r << ", max_nn " << max_nn;
+          std::sort(da.begin(), da.end());
+          ASSERT_EQ(da, db) << "radius " << r << ", max_nn " << max_nn;
+        }
+    }
+  }
+}

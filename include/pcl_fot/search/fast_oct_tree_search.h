@@ -21,12 +21,12 @@ namespace search {
  * It keeps PCL's search contract: indices refer to the input cloud even when an index subset is set;
  * Euclidean distances are squared floats, exactly those FLANN and BruteForce compute; k-NN results come
  * nearest first, and k = 1 always answers on a non-empty cloud; radius searches are inclusive, find nothing
- * for a radius of 0 or less (as KdTreeFLANN and BruteForce), and with max_nn > 0 keep the nearest max_nn.
- * Results are always nearest first, whatever setSortedResults says; ties go to the smaller index.
- * setMetric(Metric::Manhattan) makes every distance and radius Manhattan (L1). A query that is not finite
- * gets no results (0). k-NN then leaves one placeholder in the vectors, an indexed point at an infinite
- * distance: PCL's correspondence estimation and fitness score read the first result without the count, and
- * pass over such a point. So ICP ignores the NaN points of an organised source.
+ * for a radius of 0 (as KdTreeFLANN and BruteForce) or less (as BruteForce), and with max_nn > 0 keep the
+ * nearest max_nn. Results are always nearest first, whatever setSortedResults says; ties go to the smaller
+ * index. setMetric(Metric::Manhattan) makes every distance and radius Manhattan (L1). A query that is not
+ * finite gets no results (0). k-NN then leaves one placeholder in the vectors, an indexed point at an
+ * infinite distance: PCL's correspondence estimation and fitness score read the first result without the
+ * count, and pass over such a point. So ICP ignores the NaN points of an organised source.
  *
  * setInputCloud builds the index (the tree plus a table from cells to points). Calling it again with the
  * same cloud, indices and coordinates, as ICP does twice per align(), costs one pass over the points.

@@ -77,7 +77,7 @@ int FastOctTreeSearch<PointT>::nearestKSearch(const PointT& point, int k, Indice
 template <typename PointT>
 int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, Indices& k_indices,
                                             std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
-  if (!(radius > 0.0)) {  // as KdTreeFLANN and BruteForce: no point lies within a radius of 0
+  if (!(radius > 0.0)) {  // as in BruteForce; KdTreeFLANN agrees at 0 and squares a negative radius
     k_indices.clear();
     k_sqr_distances.clear();
     return 0;
