@@ -1,7 +1,8 @@
 // Fuzz target: PointIndex, the exact search behind FastOctTreeSearch, against brute force. The input picks
-// a resolution, k, a metric and a radius, then points: raw floats (NaN, Inf, huge, denormal), multiples of
-// 1/64 (ties, duplicates, points on cell faces) or multiples of 10^6. Every point is a query; k-NN and
-// radius results must equal brute force's, distances to the bit, ties to the smaller index.
+// a resolution (or none, for the cell edge picked from the points), k, a metric and a radius, then points:
+// raw floats (NaN, Inf, huge, denormal), multiples of 1/64 (ties, duplicates, points on cell faces) or
+// multiples of 10^6. Every point is a query; k-NN and radius results must equal brute force's, distances to
+// the bit, ties to the smaller index.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -46,6 +47,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const double kRadii[] = {0, 1e-3, 0.05, 0.5, 3, 1e6, 1e30, 0.0123};
   if (size < 5) return 0;
   const double resolution = kResolutions[data[0] % 8];
+  const bool automatic = data[0] & 8;  // an index that picks its own cell edge
   const std::size_t k = 1 + data[1] % 20;
   const Metric metric = data[2] & 1 ? Metric::Manhattan : Metric::Euclidean;
   const double radius = kRadii[data[3] % 8];
@@ -69,8 +71,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (n < 2) return 0;
   const std::size_t points = n - 1;  // the last triple is only a query
 
-  pcl::fot::PointIndex index(resolution);
+  pcl::fot::PointIndex index = automatic ? pcl::fot::PointIndex() : pcl::fot::PointIndex(resolution);
   index.build(xyz.data(), points, 3 * sizeof(float));
+  if (!(index.resolution() > 0.0 && std::isfinite(index.resolution()))) std::abort();
   std::vector<std::int32_t> ids;
   std::vector<float> ds;
   std::vector<Hit> all;

@@ -1,6 +1,7 @@
 #include <pcl_fot/point_index.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -8,6 +9,8 @@
 #include <stdexcept>
 
 #include <pcl_fot/accessor.h>
+
+#include "cell_size.h"
 
 namespace pcl {
 namespace fot {
@@ -68,14 +71,14 @@ class PointIndex::Policy {
   /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into
    * metres. */
   Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k,
-         double limit, std::vector<Hit>& heap)
+         double limit, std::vector<Hit>& results)
       : index_(index),
         q_{q[0], q[1], q[2]},
         metric_(metric),
         k_(k),
         limit_(limit),
         bound_(limit),
-        heap_(heap) {
+        results_(results) {
     const double res = index.tree_.getGrid().resolution();
     scale_ = metric == Metric::Euclidean ? res * res : res;
     const double slack =
@@ -129,6 +132,8 @@ class PointIndex::Policy {
 
   /** Cells with more points than this keep them sorted by x. */
   static constexpr std::uint32_t kCrowded = 64;
+  /** k for every point within the bound. */
+  static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
 
   void offer(const float* p, std::int32_t index, std::uint32_t slot) {
     const Hit h{pointDistance(metric_, p, q_), index, slot};
@@ -170,19 +175,25 @@ class PointIndex::Policy {
     return double(M == Metric::Euclidean ? dx * dx : dx) > bound_;
   }
 
-  /** A point within the bound joins the k best. */
+  /**
+   * A point within the bound joins the results. The k best are kept sorted, as FLANN keeps them: the walk
+   * finds points roughly nearest first, so a new one mostly goes near the end. Without a k (a radius search
+   * without max_nn) they are sorted once at the end instead.
+   */
   void keep(const Hit& h) {
-    if (heap_.size() < k_) {
-      heap_.push_back(h);
-      std::push_heap(heap_.begin(), heap_.end());
-    } else if (h < heap_.front()) {
-      std::pop_heap(heap_.begin(), heap_.end());
-      heap_.back() = h;
-      std::push_heap(heap_.begin(), heap_.end());
-    } else {
+    if (k_ == kAll) {
+      results_.push_back(h);
       return;
     }
-    if (heap_.size() == k_) bound_ = std::min(limit_, double(heap_.front().distance));
+    if (results_.size() == k_) {
+      if (!(h < results_.back())) return;
+      results_.pop_back();
+    }
+    std::size_t i = results_.size();
+    results_.push_back(h);
+    for (; i > 0 && h < results_[i - 1]; --i) results_[i] = results_[i - 1];
+    results_[i] = h;
+    if (results_.size() == k_) bound_ = std::min(limit_, double(results_.back().distance));
   }
 
   static double shade(double d) { return d * (1.0 - 4e-6); }
@@ -195,10 +206,12 @@ class PointIndex::Policy {
   std::size_t k_;
   double limit_;
   double bound_;  // what a point must not exceed: the k-th best so far, else the limit
-  std::vector<Hit>& heap_;
+  std::vector<Hit>& results_;
 };
 
-PointIndex::PointIndex(double resolution) : resolution_(resolution), tree_(resolution) {}
+PointIndex::PointIndex() : automatic_(true), resolution_(0.01), tree_(resolution_) {}
+
+PointIndex::PointIndex(double resolution) : automatic_(false), resolution_(resolution), tree_(resolution) {}
 
 void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_bytes,
                        const std::int32_t* subset, std::size_t subset_size) {
@@ -212,16 +225,32 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
 
   // The grid is centred on the points, which keeps the key range around them.
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  std::size_t finite = 0;
   for (std::size_t j = 0; j < n; ++j) {
     const std::int64_t i = source(j);
     if (i < 0) continue;
+    ++finite;
     for (int a = 0; a < 3; ++a)
       lo[a] = std::min(lo[a], double(point(std::size_t(i))[a])),
       hi[a] = std::max(hi[a], double(point(std::size_t(i))[a]));
   }
+  if (automatic_ && finite > 0) {
+    const std::size_t m = std::min(n, detail::kCellSizeSample);
+    std::vector<std::array<float, 3>> sample;
+    sample.reserve(m);
+    for (std::size_t s = 0; s < m; ++s) {  // evenly spaced over the input: all of it when m is n
+      const std::int64_t i = source(s * n / m);
+      if (i >= 0)
+        sample.push_back({point(std::size_t(i))[0], point(std::size_t(i))[1], point(std::size_t(i))[2]});
+    }
+    resolution_ = detail::chooseCellSize(sample, finite, lo, hi);
+  }
   double origin[3] = {0, 0, 0};
   if (lo[0] <= hi[0])
     for (int a = 0; a < 3; ++a) origin[a] = std::floor(0.5 * (lo[a] + hi[a]) / resolution_) * resolution_;
+  if (!VoxelGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
+    std::fill(origin, origin + 3,
+              0.0);  // points near float's limits: those beyond the key range are outliers
   tree_ = FastOctTree(VoxelGrid(resolution_, origin[0], origin[1], origin[2]));
   build_id_ = next_build_id++;
   outliers_xyz_.clear();
@@ -330,29 +359,30 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
     cell[a] = std::int32_t(std::clamp(std::floor(qc[a]), double(kMinKey), double(kMaxKey)));
   }
   const Key key{cell[0], cell[1], cell[2]};
-  thread_local std::vector<Hit> heap;
+  thread_local std::vector<Hit> results;
   thread_local std::uint32_t last_slot = kNoSlot;  // this thread's previous nearest point on this build
   if (accessor_fresh) last_slot = kNoSlot;
-  heap.clear();
-  Policy policy(*this, q, qc, metric, k, bound, heap);
+  results.clear();
+  const std::size_t keep = k >= size() ? Policy::kAll : k;  // all of them: no insertion in order needed
+  Policy policy(*this, q, qc, metric, keep, bound, results);
   // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
   // a point twice is harmless for one neighbour (the repeat does not beat itself).
-  if (k == 1 && last_slot != kNoSlot)
+  if (keep == 1 && last_slot != kNoSlot)
     policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
   if (!index_.empty())
     detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
   for (std::size_t i = 0; i < outliers_index_.size(); ++i)
     policy.offer(&outliers_xyz_[3 * i], outliers_index_[i], kNoSlot);
 
-  std::sort(heap.begin(), heap.end());
-  if (k == 1 && !heap.empty()) last_slot = heap.front().slot;
-  indices.reserve(heap.size());
-  distances.reserve(heap.size());
-  for (const Hit& h : heap) {
+  if (keep == Policy::kAll) std::sort(results.begin(), results.end());
+  if (k == 1 && !results.empty()) last_slot = results.front().slot;
+  indices.reserve(results.size());
+  distances.reserve(results.size());
+  for (const Hit& h : results) {
     indices.push_back(h.index);
     distances.push_back(h.distance);
   }
-  return heap.size();
+  return results.size();
 }
 
 std::size_t PointIndex::nearestK(const float q[3], std::size_t k, Metric metric,
@@ -369,8 +399,7 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
     return 0;
   }
   const double limit = metric == Metric::Euclidean ? radius * radius : radius;
-  return search(q, max_results ? max_results : std::numeric_limits<std::size_t>::max(), limit, metric,
-                indices, distances);
+  return search(q, max_results ? max_results : Policy::kAll, limit, metric, indices, distances);
 }
 
 std::size_t PointIndex::getMemoryBytes() const {

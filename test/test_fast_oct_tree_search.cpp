@@ -228,6 +228,125 @@ TEST(FastOctTreeSearch, EmptyAndDegenerateClouds) {
   EXPECT_THROW(Search(0.0), std::invalid_argument);
 }
 
+/** The points an occupied cell holds on average. */
+double pointsPerCell(const Search& s) {
+  return double(s.getPointIndex().size()) / double(s.getPointIndex().tree().getOccupiedCount());
+}
+
+/**
+ * A 16-ring LiDAR 1.7 m above flat ground inside a round wall 40 m away: rings pointing down meet the
+ * ground, the rest the wall, so returns are dense near the sensor and sparse far from it.
+ */
+Cloud::Ptr lidarInARing() {
+  Cloud::Ptr cloud(new Cloud);
+  for (int ring = 0; ring < 16; ++ring) {
+    const double elevation = (-15.0 + 2.0 * ring) * M_PI / 180.0;
+    const double to_ground = elevation < 0 ? 1.7 / std::sin(-elevation) : 1e9;
+    const double range = std::min(to_ground, 40.0 / std::cos(elevation));
+    for (int step = 0; step < 1800; ++step) {
+      const double azimuth = step * M_PI / 900.0, across = range * std::cos(elevation);
+      cloud->push_back(PointXYZ(float(across * std::cos(azimuth)), float(across * std::sin(azimuth)),
+                                float(range * std::sin(elevation))));
+    }
+  }
+  return cloud;
+}
+
+/** k-NN and radius searches on every `stride`-th finite point, moved a little, equal brute force's. */
+void expectBruteForceAnswers(const Search& ours, const Cloud::Ptr& cloud, std::size_t stride,
+                             const std::string& name) {
+  pcl::search::BruteForce<PointXYZ> brute(true);
+  brute.setInputCloud(cloud);
+  pcl::Indices a, b;
+  std::vector<float> da, db;
+  for (std::size_t i = 0; i < cloud->size(); i += stride) {
+    if (!pcl::isFinite((*cloud)[i])) continue;
+    PointXYZ q = (*cloud)[i];
+    q.x += 0.013f, q.y -= 0.021f;
+    for (int k : {1, 10}) {
+      ASSERT_EQ(brute.nearestKSearch(q, k, a, da), ours.nearestKSearch(q, k, b, db)) << name;
+      ASSERT_EQ(flannDistances(*cloud, q, a), db) << name << ": k-NN, k = " << k;
+    }
+    const double r = std::sqrt(0.5 * (double(db[8]) + double(db[9])));  // between the 9th and 10th
+    if (db[8] == db[9] || !(r > 0.0)) continue;
+    brute.radiusSearch(q, r, a, da);
+    ours.radiusSearch(q, r, b, db);
+    ASSERT_EQ(flannDistances(*cloud, q, a), db) << name << ": radius search";
+  }
+}
+
+TEST(FastOctTreeSearch, TheDefaultPicksCellsOfAboutEightPointsForAnyCloud) {
+  const std::vector<std::pair<std::string, Cloud::Ptr>> clouds = {
+      {"LiDAR in a ring wall", lidarInARing()},
+      {"airborne terrain", pcl_fot_test::loadScan("terrain_samp11.pcd")},
+      {"Kinect frame", pcl_fot_test::loadScan("kinect_capture0001.pcd")},
+      {"room scan", pcl_fot_test::loadScan("room_scan1.pcd")}};
+  for (const auto& [name, cloud] : clouds) {
+    Search ours;  // made as a pcl::search::KdTree is, with no cell size
+    ours.setInputCloud(cloud);
+    ASSERT_TRUE(ours.getPointIndex().automatic());
+    EXPECT_GE(pointsPerCell(ours), 4.0) << name << " at " << ours.getResolution() << " m";
+    EXPECT_LE(pointsPerCell(ours), 64.0) << name << " at " << ours.getResolution() << " m";
+    Search finer(ours.getResolution() / 2);  // the finest such edge: half of it holds fewer
+    finer.setInputCloud(cloud);
+    EXPECT_LT(pointsPerCell(finer), 8.0) << name;
+    expectBruteForceAnswers(ours, cloud, cloud->size() / 400, name);
+  }
+}
+
+TEST(FastOctTreeSearch, TheDefaultCopesWithDegenerateClouds) {
+  const float big = 1.7e38f;
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<float> spread(-1e30f, 1e30f), tiny(0.0f, 1e-30f);
+  std::vector<std::pair<std::string, Cloud>> clouds(8);
+  clouds[0].first = "one point";
+  clouds[0].second.push_back(PointXYZ(1, 2, 3));
+  clouds[1].first = "one place, 100 times";
+  for (int i = 0; i < 100; ++i) clouds[1].second.push_back(PointXYZ(-4, 5, 6));
+  clouds[2].first = "float's whole range";
+  for (float x : {-big, big})
+    for (float y : {-big, big}) clouds[2].second.push_back(PointXYZ(x, y, 0));
+  clouds[3].first = "at float's limit";
+  for (int i = 0; i < 20; ++i) clouds[3].second.push_back(PointXYZ(big + float(i) * 1e32f, 0, 0));
+  clouds[4].first = "1e30 m wide";
+  for (int i = 0; i < 200; ++i) clouds[4].second.push_back(PointXYZ(spread(gen), spread(gen), spread(gen)));
+  clouds[5].first = "1e-30 m wide";
+  for (int i = 0; i < 200; ++i) clouds[5].second.push_back(PointXYZ(tiny(gen), tiny(gen), tiny(gen)));
+  clouds[6].first = "a cluster and far points";
+  for (int i = 0; i < 500; ++i)
+    clouds[6].second.push_back(PointXYZ(0.001f * float(i % 10), 0.001f * float(i / 10), 0));
+  for (float f : {1e9f, -2e9f, 3e10f}) clouds[6].second.push_back(PointXYZ(f, -f, 0.5f * f));
+  clouds[7].first = "a line with NaN and Inf points";
+  for (int i = 0; i < 300; ++i)
+    clouds[7].second.push_back(i % 3 == 0   ? PointXYZ(std::nanf(""), 0, 0)
+                               : i % 3 == 1 ? PointXYZ(std::numeric_limits<float>::infinity(), 0, 0)
+                                            : PointXYZ(0.01f * float(i), 0, 0));
+  for (const auto& [name, points] : clouds) {
+    Cloud::Ptr cloud(new Cloud(points));
+    cloud->is_dense = false;  // else BruteForce takes the NaN points as any others
+    Search ours;
+    ours.setInputCloud(cloud);
+    EXPECT_TRUE(ours.getResolution() > 0.0 && std::isfinite(ours.getResolution())) << name;
+    pcl::Indices b;
+    std::vector<float> db;
+    // A fixed edge whose grid, centred on points near float's limit, would reach beyond it: centred on 0.
+    Search coarse(5e29);
+    ASSERT_NO_THROW(coarse.setInputCloud(cloud)) << name;
+    if (points.size() >= 10) {
+      expectBruteForceAnswers(ours, cloud, 1, name);
+      expectBruteForceAnswers(coarse, cloud, 1, name + " in 5e29 m cells");
+      continue;
+    }
+    ASSERT_EQ(ours.nearestKSearch(points[0], 3, b, db), std::min(3, int(points.size()))) << name;
+    EXPECT_EQ(db[0], 0.0f) << name;
+  }
+  Search ours;
+  ours.setInputCloud(Cloud::Ptr(new Cloud));
+  pcl::Indices b;
+  std::vector<float> db;
+  EXPECT_EQ(ours.nearestKSearch(PointXYZ(0, 0, 0), 1, b, db), 0);
+}
+
 TEST(FastOctTreeSearch, PointsOnCellBoundariesAreFoundAtDistanceZero) {
   // A lattice of 0.25 m: many points lie on cell faces, where the query's cell (from the reciprocal of the
   // resolution) and the point's (from the division) may differ by one. At 2 cm, PointIndex's radius of 0

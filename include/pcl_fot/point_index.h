@@ -22,7 +22,14 @@ namespace fot {
  */
 class PointIndex {
  public:
-  /** Throws std::invalid_argument for a resolution VoxelGrid refuses (see VoxelGrid::whyInvalid). */
+  /**
+   * An index that picks its cell edge at each build: the finest at which the occupied cells hold 8 points
+   * on average, where k-NN and radius searches run about fastest (doc/benchmarks.md). It counts cells on up
+   * to 65,536 of the points, evenly spaced in the input, and estimates beyond.
+   */
+  PointIndex();
+  /** A fixed cell edge. Throws std::invalid_argument for one VoxelGrid refuses (see VoxelGrid::whyInvalid).
+   */
   explicit PointIndex(double resolution);
 
   /**
@@ -38,7 +45,9 @@ class PointIndex {
   std::int32_t anyPoint() const {
     return !index_.empty() ? index_.front() : !outliers_index_.empty() ? outliers_index_.front() : -1;
   }
+  /** The cell edge: the one given, or the one the last build picked (0.01 m before the first). */
   double resolution() const { return resolution_; }
+  bool automatic() const { return automatic_; }
   const FastOctTree& tree() const { return tree_; }
 
   /**
@@ -62,6 +71,7 @@ class PointIndex {
   std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
                      std::vector<std::int32_t>& indices, std::vector<float>& distances) const;
 
+  bool automatic_;
   double resolution_;
   FastOctTree tree_;
   std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to

@@ -43,8 +43,13 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   using typename Base::PointCloud;
   using typename Base::PointCloudConstPtr;
 
-  /** `resolution`: the cell edge in metres; a handful of points per cell searches fastest. */
-  explicit FastOctTreeSearch(double resolution = 0.01, bool sorted = true);
+  /**
+   * As pcl::search::KdTree(sorted): the cell edge is picked from each cloud given, at which its occupied
+   * cells hold about 8 points or more on average (see PointIndex()).
+   */
+  explicit FastOctTreeSearch(bool sorted = true);
+  /** A fixed cell edge in metres: one that puts 8 to 30 points in a cell on average searches fastest. */
+  explicit FastOctTreeSearch(double resolution, bool sorted = true);
 
 #if PCL_VERSION_COMPARE(>=, 1, 14, 0)
   bool
@@ -83,6 +88,7 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   Metric getMetric() const {
     return metric_;
   }
+  /** The cell edge: the one given, or the one picked for the last cloud (0.01 m before the first). */
   double getResolution() const {
     return index_.resolution();
   }

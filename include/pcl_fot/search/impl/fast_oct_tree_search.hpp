@@ -14,6 +14,11 @@ namespace fot {
 namespace search {
 
 template <typename PointT>
+FastOctTreeSearch<PointT>::FastOctTreeSearch(bool sorted) : Base(sorted) {
+  this->name_ = "FastOctTreeSearch";
+}
+
+template <typename PointT>
 FastOctTreeSearch<PointT>::FastOctTreeSearch(double resolution, bool sorted)
     : Base(sorted), index_(resolution) {
   this->name_ = "FastOctTreeSearch";
