@@ -16,6 +16,14 @@ int main() {
   pcl::Indices indices;
   std::vector<float> distances;
   search.nearestKSearch(pcl::PointXYZ(0.5f, 0.5f, 1.0f), 1, indices, distances);
-  std::cout << "occupied cells: " << map.getOccupiedCount() << ", nearest point: " << indices.at(0) << "\n";
-  return map.getOccupiedCount() == 20 && indices.at(0) == 50 ? 0 : 1;
+  const bool found = indices.at(0) == 50;
+  // Made as a KdTree is, behind PCL's interface: the cell edge is picked from the cloud.
+  pcl::search::Search<pcl::PointXYZ>::Ptr picked(new pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ>);
+  picked->setInputCloud(cloud);
+  const bool picked_found =
+      picked->nearestKSearch(pcl::PointXYZ(0.5f, 0.5f, 1.0f), 3, indices, distances) == 3 &&
+      indices.at(0) == 50;
+  std::cout << "occupied cells: " << map.getOccupiedCount() << ", nearest point: " << (found ? 50 : -1)
+            << ", with the cell edge picked: " << indices.at(0) << "\n";
+  return map.getOccupiedCount() == 20 && found && picked_found ? 0 : 1;
 }
