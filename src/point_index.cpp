@@ -248,9 +248,10 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   double origin[3] = {0, 0, 0};
   if (lo[0] <= hi[0])
     for (int a = 0; a < 3; ++a) origin[a] = std::floor(0.5 * (lo[a] + hi[a]) / resolution_) * resolution_;
+  // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the points
+  // beyond its key range are outliers.
   if (!VoxelGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
-    std::fill(origin, origin + 3,
-              0.0);  // points near float's limits: those beyond the key range are outliers
+    std::fill(origin, origin + 3, 0.0);
   tree_ = FastOctTree(VoxelGrid(resolution_, origin[0], origin[1], origin[2]));
   build_id_ = next_build_id++;
   outliers_xyz_.clear();

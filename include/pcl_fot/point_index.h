@@ -28,7 +28,8 @@ class PointIndex {
    * to 65,536 of the points, evenly spaced in the input, and estimates beyond.
    */
   PointIndex();
-  /** A fixed cell edge. Throws std::invalid_argument for one VoxelGrid refuses (see VoxelGrid::whyInvalid).
+  /**
+   * A fixed cell edge. Throws std::invalid_argument for one VoxelGrid refuses (see VoxelGrid::whyInvalid).
    */
   explicit PointIndex(double resolution);
 
