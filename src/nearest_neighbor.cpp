@@ -49,6 +49,10 @@ class NearestCellSearch::Measure {
     for (int a = 0; a < 3; ++a) cell[a] = std::clamp(q_[a], lo[a], lo[a] + last);
   }
 
+ protected:
+  Metric metric() const { return metric_; }
+  const std::uint32_t* query() const { return q_; }
+
  private:
   static constexpr std::int64_t kMaxGap = (std::int64_t(1) << 30) + 1;
 
@@ -70,7 +74,36 @@ class NearestCellSearch::NearestOne : public Measure {
         bound_(limit < kUnbounded ? limit + 1 : limit) {}
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound < bound_; }
-  bool settled(Distance exterior) const { return bound_ <= exterior; }
+  /**
+   * A box only as near as the best holds one cell that near, the query clamped into it: it can improve the
+   * result only if that cell's key is smaller.
+   */
+  bool mayImprove(Distance lower_bound, const std::uint32_t lo[3], unsigned level) const {
+    if (lower_bound + tie_slack_ < bound_ || !found_) return true;  // nearer, or no tie rule
+    Candidate tie{lower_bound, {0, 0, 0}};
+    clampInto(lo, level, tie.u);
+    return tie < best_;
+  }
+  /**
+   * Outside the cube, a cell as near as the best lies beyond one face, and one exactly as near as that
+   * face's gap is the query moved straight through it: with the tie rule only those with a smaller key
+   * keep the walk going.
+   */
+  bool settled(const std::uint32_t lo[3], unsigned level) const {
+    if (!found_ || tie_slack_ == 0 || bound_ == 0) return bound_ <= exterior(lo, level);
+    const std::int64_t side = std::int64_t(1) << level;
+    for (int a = 0; a < 3; ++a)
+      for (const std::int64_t step :
+           {std::int64_t(lo[a]) - 1 - query()[a], std::int64_t(lo[a]) + side - query()[a]}) {
+        const Distance gap = metric() == Metric::Manhattan ? std::llabs(step) : step * step;
+        if (gap > best_.distance) continue;
+        if (gap < best_.distance) return false;
+        Candidate beyond{gap, {query()[0], query()[1], query()[2]}};
+        beyond.u[a] = std::uint32_t(std::int64_t(query()[a]) + step);
+        if (beyond < best_) return false;
+      }
+    return true;
+  }
   bool wholeRegions() const { return true; }
   void visitRegion(const std::uint32_t lo[3], unsigned level, std::uint64_t) {
     std::uint32_t cell[3];
@@ -105,7 +138,8 @@ class NearestCellSearch::NearestK : public Measure {
       : Measure(metric, query), k_(k), limit_(limit), heap_(heap) {}
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
-  bool settled(Distance exterior) const { return bound() < exterior; }
+  bool mayImprove(Distance, const std::uint32_t[3], unsigned) const { return true; }
+  bool settled(const std::uint32_t lo[3], unsigned level) const { return bound() < exterior(lo, level); }
   bool wholeRegions() const { return false; }
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
   void visitCell(const std::uint32_t cell[3], std::uint64_t) {

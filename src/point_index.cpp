@@ -113,7 +113,8 @@ class PointIndex::Policy {
   }
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
-  bool settled(Distance exterior) const { return bound_ < exterior; }
+  bool mayImprove(Distance, const std::uint32_t[3], unsigned) const { return true; }
+  bool settled(const std::uint32_t lo[3], unsigned level) const { return bound_ < exterior(lo, level); }
   bool wholeRegions() const { return false; }
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
 

@@ -29,8 +29,11 @@ namespace detail {
  * - `childGaps(lo, child_level, gap)`: for the cube at `lo` with children of child_level, per axis, the
  *   query's distance to the lower (gap[a][0]) and upper (gap[a][1]) half, in the metric's units (squared
  *   for Euclidean); a child's lower bound sums its halves';
- * - `exterior(lo, level)`: nothing outside the query's cube at `lo` lies nearer than this;
- * - `worthVisiting(lower_bound)` and `settled(exterior)`: the pruning and stopping tests;
+ * - `worthVisiting(lower_bound)`: the pruning test, and `mayImprove(lower_bound, lo, level)` a second one
+ *   for a box that passed it (boxes are taken nearest first, so the walk stops at the first box that fails
+ *   the first test, and only skips one that fails the second);
+ * - `settled(lo, level)`: the stopping test, true when nothing outside the query's cube at `lo` can improve
+ *   the result;
  * - `wholeRegions()`: visit uniform cubes whole rather than cell by cell;
  * - `visitRegion(lo, level, rank)` and `visitCell(cell, rank)`: a target cube or cell to consider.
  * Cubes are given in tree coordinates. `rank` numbers target cells in the tree's Morton order when the walk
@@ -58,7 +61,7 @@ class NeighbourWalk {
     corner(q, bottom, base);
     searchAround(words_[accessor.pathOffset(bottom)], accessor.pathOffset(bottom), bottom, base, 8);
     for (unsigned level = bottom + 1; level <= tree_.rootLevel(); ++level) {
-      if (policy_.settled(policy_.exterior(base, level - 1))) return;
+      if (policy_.settled(base, level - 1)) return;
       const unsigned skip = tree_coord::octant(q[0], q[1], q[2], level);
       corner(q, level, base);
       searchAround(words_[accessor.pathOffset(level)], accessor.pathOffset(level), level, base, skip);
@@ -139,6 +142,7 @@ class NeighbourWalk {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
       childCorner(base, sub, c[i].octant, lo);
+      if (!policy_.mayImprove(c[i].bound, lo, sub)) continue;
       if (bitmap) {
         const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
         searchRegion(lo, sub, rank + node::cellsIn(node::popcount(before), sub));
@@ -186,6 +190,7 @@ class NeighbourWalk {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
       childCorner(base, sub, c[i].octant, lo);
+      if (!policy_.mayImprove(c[i].bound, lo, sub)) continue;
       const std::uint32_t before = mask & ((1u << c[i].octant) - 1u);
       searchRegion(lo, sub, rank + node::cellsIn(node::popcount(before), sub));
     }
@@ -201,6 +206,7 @@ class NeighbourWalk {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
       childCorner(base, sub, c[i].octant, lo);
+      if (!policy_.mayImprove(c[i].bound, lo, sub)) continue;
       searchWord(words_[first + c[i].octant], first + c[i].octant, sub, lo);
     }
   }
@@ -222,6 +228,7 @@ class NeighbourWalk {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t child[3];
       childCorner(lo, sub, c[i].octant, child);
+      if (!policy_.mayImprove(c[i].bound, child, sub)) continue;
       searchRegion(child, sub, rank + node::cellsIn(c[i].octant, sub));
     }
   }

@@ -176,12 +176,18 @@ std::string pointLevel(const BenchScan& target, const BenchScan& source, double 
   const double flann = results[2].build_ms + results[2].query_ms,
                nano = results[4].build_ms + results[4].query_ms,
                octree = results[6].build_ms + results[6].query_ms;
-  verdicts.push_back(
-      format("%s into %s: FOT Euclidean is **%.2f×** faster than pcl::KdTreeFLANN (target 2×), "
-             "**%.2f×** nanoflann L2's time (target ≤ 1.5×), **%.1f×** faster than pcl::search::Octree "
-             "(target 20×).",
-             source.name.c_str(), target.name.c_str(), flann / fot_l2_total, fot_l2_total / nano,
-             octree / fot_l2_total));
+  std::string verdict = format(
+      "%s into %s: FOT Euclidean is **%.2f×** faster than pcl::KdTreeFLANN (target 2×), "
+      "**%.2f×** nanoflann L2's time (target ≤ 1.5×), **%.1f×** faster than pcl::search::Octree "
+      "(target 20×).",
+      source.name.c_str(), target.name.c_str(), flann / fot_l2_total, fot_l2_total / nano,
+      octree / fot_l2_total);
+  if (octree < 20 * fot_l2_total)
+    verdict += format(
+        " The 20× is missed because pcl::search::Octree is fast on this cloud: it takes only %.1f× nanoflann "
+        "L2's time, so 20× would need %.2f× nanoflann's speed.",
+        octree / nano, 20 * nano / octree);
+  verdicts.push_back(verdict);
   std::string out = format("**%s into %s**, %zu queries, cells of %.2f m:\n\n", source.name.c_str(),
                            target.name.c_str(), queries.size(), res);
   return out + t.markdown() + "\n";
@@ -202,8 +208,8 @@ std::string voxelLevel(const BenchScan& target, const BenchScan& source, double 
   Points centres;
   for (const auto& k : targets) centres.xyz.insert(centres.xyz.end(), {float(k.x), float(k.y), float(k.z)});
 
-  std::vector<double> t_fot, t_nano, t_batch[2];  // the batch on 1 and on 2 threads
-  std::int64_t sum_fot = 0, sum_batch[2] = {0, 0};
+  std::vector<double> t_fot, t_any, t_nano, t_batch[2];  // the batch on 1 and on 2 threads
+  std::int64_t sum_fot = 0, sum_any = 0, sum_batch[2] = {0, 0};
   double sum_nano = 0;
   for (int r = 0; r < repeats; ++r) {
     scrubCaches();
@@ -216,6 +222,18 @@ std::string voxelLevel(const BenchScan& target, const BenchScan& source, double 
       for (const auto& q : queries) {
         search.nearest(q, m);
         sum_fot += m.distance;
+      }
+    }));
+    scrubCaches();
+    t_any.push_back(timeOnce([&] {
+      pcl::fot::FastOctTree tree(grid);
+      tree.insertKeys(targets.data(), targets.size());
+      pcl::fot::NearestCellSearch search(tree, pcl::fot::Metric::Manhattan);
+      pcl::fot::CellMatch m;
+      sum_any = 0;
+      for (const auto& q : queries) {
+        search.anyNearest(q, m);
+        sum_any += m.distance;
       }
     }));
     for (unsigned threads : {1u, 2u}) {
@@ -246,16 +264,25 @@ std::string voxelLevel(const BenchScan& target, const BenchScan& source, double 
       }
     }));
   }
-  const double fot = median(t_fot) * 1e3, batch = median(t_batch[0]) * 1e3, batch2 = median(t_batch[1]) * 1e3,
-               nano = median(t_nano) * 1e3;
-  verdicts.push_back(
-      format("Voxel level, %s into %s: against nanoflann L1 on the same voxel centres (target: faster), the "
-             "Manhattan nearest-tree-neighbour search is **%.2f×** as fast one query at a time and **%.2f×** "
-             "as a batch.",
-             source.name.c_str(), target.name.c_str(), nano / fot, nano / batch));
+  const double fot = median(t_fot) * 1e3, any = median(t_any) * 1e3, batch = median(t_batch[0]) * 1e3,
+               batch2 = median(t_batch[1]) * 1e3, nano = median(t_nano) * 1e3;
+  std::string verdict = format(
+      "Voxel level, %s into %s: against nanoflann L1 on the same voxel centres (target: faster), the "
+      "Manhattan nearest-tree-neighbour search is **%.2f×** as fast one query at a time and **%.2f×** "
+      "as a batch.",
+      source.name.c_str(), target.name.c_str(), nano / fot, nano / batch);
+  if (fot > nano)
+    verdict += format(
+        " One query at a time it also keeps the tie rule (the smaller key among equally near cells), which "
+        "nanoflann does not: without it (`anyNearest`) it is %.2f× as fast.",
+        nano / any);
+  verdicts.push_back(verdict);
   Table t({"method", "target cells", "queries", "build + query ms", "sum of L1 distances"});
   t.add({"FOT NearestCellSearch (Manhattan), one query at a time", format("%zu", targets.size()),
          format("%zu", queries.size()), format("%.1f", fot), format("%lld", (long long)sum_fot)});
+  t.add({"FOT NearestCellSearch (Manhattan), one query at a time, no tie rule (anyNearest)",
+         format("%zu", targets.size()), format("%zu", queries.size()), format("%.1f", any),
+         format("%lld", (long long)sum_any)});
   t.add({"FOT NearestCellSearch (Manhattan), batch", format("%zu", targets.size()),
          format("%zu", queries.size()), format("%.1f", batch), format("%lld", (long long)sum_batch[0])});
   t.add({"FOT NearestCellSearch (Manhattan), batch, 2 threads", format("%zu", targets.size()),
