@@ -127,22 +127,40 @@ double nanoflannPsi(const Centres& a, const Centres& b) {
 std::string tableV(const std::vector<MapPair>& pairs, int dmap_repeats, std::vector<std::string>& verdicts) {
   Table t({"maps", "cells a / b", "tree ψ mean ms", "variance", "dmap_v mean ms", "variance", "speed-up",
            "same ψ"});
-  double worst = 1e300, best = 0;
+  double worst = 1e300, best = 0, dmap_low = 1e300, dmap_high = 0;
+  std::size_t met = 0, largest_met = 0, smallest_missed = ~std::size_t(0);  // rows, and their cells a + b
   for (const MapPair& p : pairs) {
     std::fprintf(stderr, "  psi: Table V, %s\n", p.name.c_str());
     const PsiTimes times = timePsi(p, 5, dmap_repeats);
     const double speedup = mean(times.dmap) / mean(times.tree);
     worst = std::min(worst, speedup);
     best = std::max(best, speedup);
+    dmap_low = std::min(dmap_low, mean(times.dmap));
+    dmap_high = std::max(dmap_high, mean(times.dmap));
+    const std::size_t cells = p.a.size() + p.b.size();
+    if (speedup >= 10000) {
+      ++met;
+      largest_met = std::max(largest_met, cells);
+    } else {
+      smallest_missed = std::min(smallest_missed, cells);
+    }
     t.add({p.name, format("%zu / %zu", p.a.size(), p.b.size()), format("%.3f", mean(times.tree)),
            format("%.5f", variance(times.tree)), format("%.0f", mean(times.dmap)),
            format("%.0f", variance(times.dmap)), format("**%.0f×**", speedup),
            times.tree_sum == times.dmap_sum ? "yes" : "**NO**"});
   }
-  verdicts.push_back(
-      format("Table V: tree ψ is **%.0f× to %.0f×** faster than dmap_v at 1024³ on the real scans "
-             "(target 10,000×; the paper: 1,376× to 39,255×).",
-             worst, best));
+  std::string verdict = format(
+      "Table V: tree ψ is **%.0f× to %.0f×** faster than dmap_v at 1024³ on the real scans "
+      "(target 10,000×; the paper: 1,376× to 39,255×).",
+      worst, best);
+  if (met < pairs.size())
+    verdict += format(
+        " 10,000× holds on %zu of %zu rows. dmap_v takes %.1f–%.1f s whatever the maps, as it transforms the "
+        "whole grid, so 10,000× leaves tree ψ %.2f–%.2f ms; ψ's cost grows with the cells compared, and "
+        "the rows that miss compare %zu cells or more (a + b)%s.",
+        met, pairs.size(), dmap_low / 1e3, dmap_high / 1e3, dmap_low / 1e4, dmap_high / 1e4, smallest_missed,
+        met > 0 ? format(", those that meet it at most %zu", largest_met).c_str() : "");
+  verdicts.push_back(verdict);
   return format(
              "### Real scans (paper Table V)\n\n"
              "Pairs of scans of one scene, as the paper compares consecutive frames. The Kinect frames in "
