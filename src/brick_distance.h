@@ -51,7 +51,8 @@ struct BitCube {
   }
   unsigned count() const {
     unsigned n = 0;
-    for (std::uint64_t w : bits) n += popcount64(w);
+    for (std::uint64_t w : bits)
+      if (w) n += popcount64(w);  // most words of a sparse brick are empty
     return n;
   }
 

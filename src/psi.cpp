@@ -44,6 +44,7 @@ void collectPieces(const NodeWord* words, NodeWord w, unsigned level, std::uint3
   for (unsigned o = 0; o < 8; ++o) {
     const NodeWord child =
         node::isBitmap(w) ? node::uniform(node::state(w, o)) : words[node::childBase(w) + o];
+    if (node::isBitmap(child) && !node::holds(child, v)) continue;  // most, in sparse maps
     collectPieces(words, child, level - 1, x + (o & 1u) * half, y + ((o >> 1) & 1u) * half,
                   z + ((o >> 2) & 1u) * half, v, out);
   }
@@ -118,11 +119,19 @@ class DirectedSum {
     }
     // The rest take the walk, but one walk settles many: see Certificate. The first cell left picks the
     // sweep, towards its nearest cell along each axis, so that later cells lie between earlier ones and
-    // their nearest cells.
-    if (!cells.any()) return sum;
+    // their nearest cells. A brick too sparse for a window is too sparse for the order to matter.
     floor_ = settled + 1;
     constexpr unsigned side = detail::Brick::kSide;
     certificate_count_ = 0;
+    if (settled < 0) {
+      for (unsigned w = 0; w < detail::Brick::kWords; ++w)
+        for (std::uint64_t bits = cells.bits[w]; bits; bits &= bits - 1) {
+          const unsigned i = w * 64 + unsigned(__builtin_ctzll(bits));
+          sum += distance(cellKey(corner, i % side, (i / side) % side, i / (side * side)));
+        }
+      return sum;
+    }
+    if (!cells.any()) return sum;
     unsigned w = 0;
     while (cells.bits[w] == 0) ++w;
     const unsigned i = w * 64 + unsigned(__builtin_ctzll(cells.bits[w]));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -44,8 +45,14 @@ class NeighbourWalk {
  public:
   using Distance = typename Policy::Distance;
 
+  /** `target` is Occupied or Free: the walk finds cells of one known state. */
   NeighbourWalk(const FastOctTree& tree, CellState target, const std::uint64_t* ranks, Policy& policy)
-      : tree_(tree), words_(tree.words()), target_(target), ranks_(ranks), policy_(policy) {}
+      : tree_(tree),
+        words_(tree.words()),
+        target_(target),
+        no_targets_mask_(node::kBitmapTag | node::stateBits(target)),
+        ranks_(ranks),
+        policy_(policy) {}
 
   /** Searches around the cell `query`, which may lie anywhere, inside the tree or not. */
   void run(ConstAccessor& accessor, const Key& query) {
@@ -112,15 +119,20 @@ class NeighbourWalk {
     return n;
   }
 
-  /** Octants of a reference word whose child may hold target cells. */
+  /**
+   * Octants of a reference word whose child may hold target cells: a reference, or a bitmap holding some.
+   * Four children per vector operation: the walk asks this at every reference it passes.
+   */
   std::uint32_t childrenWithTargets(NodeWord w) const {
-    const std::size_t first = node::childBase(w);
-    std::uint32_t mask = 0;
-    for (unsigned o = 0; o < 8; ++o) {
-      const NodeWord child = words_[first + o];
-      if (!node::isBitmap(child) || node::holds(child, target_)) mask |= 1u << o;
-    }
-    return mask;
+    using Lanes = std::int32_t __attribute__((vector_size(16)));
+    Lanes low, high;
+    std::memcpy(&low, words_ + node::childBase(w), sizeof low);
+    std::memcpy(&high, words_ + node::childBase(w) + 4, sizeof high);
+    const Lanes keep = Lanes{} + std::int32_t(no_targets_mask_),
+                tag = Lanes{} + std::int32_t(node::kBitmapTag);
+    const Lanes none =
+        (((low & keep) == tag) & Lanes{1, 2, 4, 8}) | (((high & keep) == tag) & Lanes{16, 32, 64, 128});
+    return ~std::uint32_t(none[0] | none[1] | none[2] | none[3]) & 0xFFu;
   }
 
   /** A node that holds the query: its children (or octants), except `skip`, nearest first, as the paper
@@ -166,12 +178,35 @@ class NeighbourWalk {
     }
   }
 
-  /** A node word: a bitmap's target octants are uniform cubes, a reference's children are searched. */
+  /**
+   * A node word: a bitmap's target octants are uniform cubes, a reference's children are searched. In sparse
+   * maps a lone cell hangs below a chain of references with one child each: the walk follows it in a loop,
+   * checking each link's bound, with nothing to order.
+   */
   void searchWord(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3]) {
-    if (!node::isBitmap(w)) {
-      searchChildren(w, level, base, 8);
-      return;
+    std::uint32_t lo[3] = {base[0], base[1], base[2]};
+    while (!node::isBitmap(w)) {
+      const std::uint32_t children = childrenWithTargets(w);
+      if (children & (children - 1)) {
+        searchChildren(w, children, level, lo);
+        return;
+      }
+      if (children == 0) return;
+      const unsigned o = unsigned(__builtin_ctz(children)), sub = level - 1;
+      Distance gap[3][2];
+      policy_.childGaps(lo, sub, gap);
+      const Distance bound = childBound(gap, o);
+      childCorner(lo, sub, o, lo);
+      if (!policy_.worthVisiting(bound) || !policy_.mayImprove(bound, lo, sub)) return;
+      offset = node::childBase(w) + o;
+      w = words_[offset];
+      level = sub;
     }
+    searchBitmap(w, offset, level, lo);
+  }
+
+  /** A bitmap word: its target octants are uniform cubes. */
+  void searchBitmap(NodeWord w, std::size_t offset, unsigned level, const std::uint32_t base[3]) {
     const std::uint32_t mask = node::octantMask(w, target_);
     if (mask == 0) return;
     const std::uint64_t rank = ranks_ ? ranks_[offset] : 0;
@@ -196,12 +231,12 @@ class NeighbourWalk {
     }
   }
 
-  /** The children of a reference word, except octant `skip` (8: none), nearest first. */
-  void searchChildren(NodeWord w, unsigned level, const std::uint32_t base[3], unsigned skip) {
+  /** The children of a reference word that may hold targets (`children`), nearest first. */
+  void searchChildren(NodeWord w, std::uint32_t children, unsigned level, const std::uint32_t base[3]) {
     const std::size_t first = node::childBase(w);
     const unsigned sub = level - 1;
     Child c[8];
-    const int n = nearestFirst(base, sub, childrenWithTargets(w) & ~(skip < 8 ? 1u << skip : 0u), c);
+    const int n = nearestFirst(base, sub, children, c);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
       std::uint32_t lo[3];
@@ -236,6 +271,7 @@ class NeighbourWalk {
   const FastOctTree& tree_;
   const NodeWord* words_;
   CellState target_;
+  NodeWord no_targets_mask_;  // a child word is a bitmap without targets iff (word & this) == kBitmapTag
   const std::uint64_t* ranks_;
   Policy& policy_;
 };

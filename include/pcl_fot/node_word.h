@@ -108,19 +108,17 @@ constexpr std::uint32_t octantMask(NodeWord w, CellState s) {
   }
 }
 
+/** The state bits of a bitmap word that mark Occupied or Free octants: one bit of every pair. */
+constexpr NodeWord stateBits(CellState s) {
+  return (s == CellState::Occupied ? 0xAAAAu : s == CellState::Free ? 0x5555u : 0u) << kStateShift;
+}
+
 /**
  * Whether any octant of a bitmap word holds `s`. Occupied (binary 10) and free (01) are each one bit of
  * every pair, so for them this is a single test, where the searches ask it of every child they pass.
  */
 constexpr bool holds(NodeWord w, CellState s) {
-  switch (s) {
-    case CellState::Occupied:
-      return (w & (0xAAAAu << kStateShift)) != 0;
-    case CellState::Free:
-      return (w & (0x5555u << kStateShift)) != 0;
-    default:
-      return octantMask(w, s) != 0;
-  }
+  return s == CellState::Unknown ? octantMask(w, s) != 0 : (w & stateBits(s)) != 0;
 }
 
 }  // namespace node
