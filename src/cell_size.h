@@ -1,5 +1,5 @@
 #pragma once
-// Private to the library: the cell edge an automatic PointIndex picks for its points.
+// Private to the library: how a PointIndex fits its grid to its points (their bulk, the cell edge).
 
 #include <array>
 #include <cstddef>
@@ -20,14 +20,24 @@ constexpr double kPointsPerCell = 8.0;
 constexpr double kFinestCell = 1e-18, kCoarsestCell = 0x1p96;
 
 /**
+ * The box holding the bulk of the points: per axis, Tukey's far fences (three interquartile ranges beyond
+ * the quartiles) of `sample`, an even sample of them, within their bounding box [lo, hi]. A few stray points
+ * far away, as sensors give, barely move it, where they stretch the bounding box by orders of magnitude.
+ */
+void bulkBox(const std::vector<std::array<float, 3>>& sample, const double lo[3], const double hi[3],
+             double bulk_lo[3], double bulk_hi[3]);
+
+/**
  * The finest cell edge, of side / 2^l for l = 0..21 (side: the longest side of the points' bounding box
  * [lo, hi]), at which the points' occupied cells hold kPointsPerCell points on average; side itself if none
- * does; within [kFinestCell, kCoarsestCell]. `sample` holds `finite_count` finite points, or an even sample
- * of them: then the cells are counted on the sample, and the full count estimated as if every cell held the
- * same number of points.
+ * does; within [kFinestCell, kCoarsestCell]. When even side / 2^21 holds that many, stray points stretch the
+ * box: the edges are then those of the bulk box [bulk_lo, bulk_hi], counting the points inside it. `sample`
+ * holds `finite_count` finite points, or an even sample of them: then the cells are counted on the sample,
+ * and the full count estimated as if every cell held the same number of points.
  */
 double chooseCellSize(const std::vector<std::array<float, 3>>& sample, std::size_t finite_count,
-                      const double lo[3], const double hi[3]);
+                      const double lo[3], const double hi[3], const double bulk_lo[3],
+                      const double bulk_hi[3]);
 
 }  // namespace detail
 }  // namespace fot

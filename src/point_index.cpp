@@ -119,9 +119,9 @@ class PointIndex::Policy {
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
 
   /**
-   * A cell's points. A crowded cell's points are sorted by x (see build), so the scan starts at the query's x
-   * and sweeps outwards, each way until x alone is beyond the bound: a float sum of non-negative terms is
-   * never below one of them, so nothing nearer is skipped.
+   * A cell's points, or the outliers' (the run after the last cell). A crowded run is sorted by x (see
+   * build), so the scan starts at the query's x and sweeps outwards, each way until x alone is beyond the
+   * bound: a float sum of non-negative terms is never below one of them, so nothing nearer is skipped.
    */
   void visitCell(const std::uint32_t[3], std::uint64_t rank) {
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
@@ -224,7 +224,6 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     return (i >= 0 && std::size_t(i) < count && finite3(point(std::size_t(i)))) ? i : -1;
   };
 
-  // The grid is centred on the points, which keeps the key range around them.
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   std::size_t finite = 0;
   for (std::size_t j = 0; j < n; ++j) {
@@ -235,31 +234,43 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
       lo[a] = std::min(lo[a], double(point(std::size_t(i))[a])),
       hi[a] = std::max(hi[a], double(point(std::size_t(i))[a]));
   }
-  if (automatic_ && finite > 0) {
-    const std::size_t m = std::min(n, detail::kCellSizeSample);
-    std::vector<std::array<float, 3>> sample;
-    sample.reserve(m);
-    for (std::size_t s = 0; s < m; ++s) {  // evenly spaced over the input: all of it when m is n
-      const std::int64_t i = source(s * n / m);
-      if (i >= 0)
-        sample.push_back({point(std::size_t(i))[0], point(std::size_t(i))[1], point(std::size_t(i))[2]});
-    }
-    resolution_ = detail::chooseCellSize(sample, finite, lo, hi);
-  }
   double origin[3] = {0, 0, 0};
-  if (lo[0] <= hi[0])
-    for (int a = 0; a < 3; ++a) origin[a] = std::floor(0.5 * (lo[a] + hi[a]) / resolution_) * resolution_;
+  if (finite > 0) {
+    // An even sample of the points (all of them up to kCellSizeSample) gives their bulk, when needed.
+    std::vector<std::array<float, 3>> sample;
+    double bulk_lo[3], bulk_hi[3];
+    auto findBulk = [&] {
+      const std::size_t m = std::min(n, detail::kCellSizeSample);
+      sample.reserve(m);
+      for (std::size_t s = 0; s < m; ++s) {
+        const std::int64_t i = source(s * n / m);
+        if (i >= 0)
+          sample.push_back({point(std::size_t(i))[0], point(std::size_t(i))[1], point(std::size_t(i))[2]});
+      }
+      detail::bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
+    };
+    if (automatic_) {
+      findBulk();
+      resolution_ = detail::chooseCellSize(sample, finite, lo, hi, bulk_lo, bulk_hi);
+    }
+    // The grid is centred on the points, or on their bulk when they reach further than its keys: then a few
+    // stray points far away become the outliers, rather than the bulk.
+    const double reach = 2.0 * double(kMaxKey) * resolution_;
+    const bool fits = hi[0] - lo[0] <= reach && hi[1] - lo[1] <= reach && hi[2] - lo[2] <= reach;
+    if (!fits && sample.empty()) findBulk();
+    for (int a = 0; a < 3; ++a)
+      origin[a] =
+          std::floor(0.5 * (fits ? lo[a] + hi[a] : bulk_lo[a] + bulk_hi[a]) / resolution_) * resolution_;
+  }
   // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the points
   // beyond its key range are outliers.
   if (!VoxelGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
     std::fill(origin, origin + 3, 0.0);
   tree_ = FastOctTree(VoxelGrid(resolution_, origin[0], origin[1], origin[2]));
   build_id_ = next_build_id++;
-  outliers_xyz_.clear();
-  outliers_index_.clear();
 
   std::vector<Key> keys;
-  std::vector<std::int32_t> ids;
+  std::vector<std::int32_t> ids, outliers;  // outliers: finite points beyond the key range
   keys.reserve(n);
   ids.reserve(n);
   Accessor writer(tree_);
@@ -269,8 +280,7 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     const float* p = point(std::size_t(i));
     Key key;
     if (!tree_.getGrid().pointToKey(p[0], p[1], p[2], key)) {
-      outliers_xyz_.insert(outliers_xyz_.end(), p, p + 3);
-      outliers_index_.push_back(std::int32_t(i));
+      outliers.push_back(std::int32_t(i));
       continue;
     }
     writer.setValidCell(key, CellState::Occupied);
@@ -281,7 +291,7 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   ranks_.assign(tree_.poolWords(), 0);
   const std::uint64_t cells = assignRanks(tree_, tree_.rootWord(), 0, tree_.rootLevel(), 0, ranks_);
 
-  // Each point's cell rank, then a counting sort into the table.
+  // Each point's cell rank, then a counting sort into the table. The outliers come last, as one more run.
   std::vector<std::uint32_t> rank_of(keys.size());
   ConstAccessor reader(tree_);
   for (std::size_t j = 0; j < keys.size(); ++j) {
@@ -296,23 +306,25 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     rank_of[j] = std::uint32_t(ranks_[offset] + node::cellsIn(node::popcount(before), level - 1) +
                                mortonWithin(u[0] & inner, u[1] & inner, u[2] & inner, level - 1));
   }
-  start_.assign(std::size_t(cells) + 1, 0);
+  ids.insert(ids.end(), outliers.begin(), outliers.end());
+  rank_of.resize(ids.size(), std::uint32_t(cells));
+  start_.assign(std::size_t(cells) + 2, 0);
   for (std::uint32_t r : rank_of) ++start_[r + 1];
-  for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
-  xyz_.resize(3 * keys.size());
-  index_.resize(keys.size());
+  for (std::size_t c = 0; c <= cells; ++c) start_[c + 1] += start_[c];
+  xyz_.resize(3 * ids.size());
+  index_.resize(ids.size());
   std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-  for (std::size_t j = 0; j < keys.size(); ++j) {
+  for (std::size_t j = 0; j < ids.size(); ++j) {
     const std::uint32_t at = fill[rank_of[j]]++;
     const float* p = point(std::size_t(ids[j]));
     std::copy(p, p + 3, &xyz_[3 * std::size_t(at)]);
     index_[at] = ids[j];
   }
-  // Crowded cells keep their points sorted by x, for the sweep in Policy::visitCell.
+  // Crowded runs keep their points sorted by x, for the sweep in Policy::visitCell.
   std::vector<std::uint32_t> order;
   std::vector<float> cell_xyz;
   std::vector<std::int32_t> cell_index;
-  for (std::size_t c = 0; c < cells; ++c) {
+  for (std::size_t c = 0; c <= cells; ++c) {
     const std::uint32_t begin = start_[c], end = start_[c + 1];
     if (end - begin <= Policy::kCrowded) continue;
     order.resize(end - begin);
@@ -336,7 +348,7 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
                                std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
   indices.clear();
   distances.clear();
-  if (!finite3(q) || k == 0 || bound < 0 || (index_.empty() && outliers_index_.empty())) return 0;
+  if (!finite3(q) || k == 0 || bound < 0 || index_.empty()) return 0;
 
   // This thread's path from its previous query on this build, so queries in spatial order start near.
   thread_local const PointIndex* owner = nullptr;
@@ -371,10 +383,10 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   // a point twice is harmless for one neighbour (the repeat does not beat itself).
   if (keep == 1 && last_slot != kNoSlot)
     policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
-  if (!index_.empty())
+  const std::size_t outliers = start_.size() - 2;  // the rank of the run after the cells'
+  if (start_[outliers] > 0)
     detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
-  for (std::size_t i = 0; i < outliers_index_.size(); ++i)
-    policy.offer(&outliers_xyz_[3 * i], outliers_index_[i], kNoSlot);
+  if (start_[outliers + 1] > start_[outliers]) policy.visitCell(nullptr, outliers);
 
   if (keep == Policy::kAll) std::sort(results.begin(), results.end());
   if (k == 1 && !results.empty()) last_slot = results.front().slot;
@@ -407,8 +419,7 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
 std::size_t PointIndex::getMemoryBytes() const {
   return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
-         index_.capacity() * sizeof(std::int32_t) + outliers_xyz_.capacity() * sizeof(float) +
-         outliers_index_.capacity() * sizeof(std::int32_t);
+         index_.capacity() * sizeof(std::int32_t);
 }
 
 }  // namespace fot

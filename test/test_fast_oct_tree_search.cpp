@@ -347,6 +347,28 @@ TEST(FastOctTreeSearch, TheDefaultCopesWithDegenerateClouds) {
   EXPECT_EQ(ours.nearestKSearch(PointXYZ(0, 0, 0), 1, b, db), 0);
 }
 
+TEST(FastOctTreeSearch, StrayPointsFarAwayLeaveTheBulkInTheTree) {
+  // A few stray returns far away, all on one side, as a stereo camera gives at near-zero disparity. They
+  // must neither stretch the cells to their span nor push the bulk out of the keys' reach: either way a
+  // search would scan most of the points.
+  const Cloud::Ptr bulk = lidarInARing();
+  Cloud::Ptr cloud(new Cloud);
+  for (float f : {3e8f, 5e8f, 1e9f}) cloud->push_back(PointXYZ(f, 0.5f * f, 0));
+  *cloud += *bulk;
+  for (double res : {0.0, 0.05}) {  // 0: picked from the cloud
+    const std::string name = res > 0 ? "0.05 m cells" : "automatic cells";
+    Search alone = res > 0 ? Search(res) : Search(), ours = res > 0 ? Search(res) : Search();
+    alone.setInputCloud(bulk);
+    ours.setInputCloud(cloud);
+    EXPECT_GE(ours.getResolution(), alone.getResolution() / 2) << name;
+    EXPECT_LE(ours.getResolution(), alone.getResolution() * 2) << name;
+    EXPECT_GT(ours.getPointIndex().tree().getOccupiedCount(),
+              alone.getPointIndex().tree().getOccupiedCount() / 2)
+        << name;
+    expectBruteForceAnswers(ours, cloud, cloud->size() / 200, name);  // from a stray point on
+  }
+}
+
 TEST(FastOctTreeSearch, PointsOnCellBoundariesAreFoundAtDistanceZero) {
   // A lattice of 0.25 m: many points lie on cell faces, where the query's cell (from the reciprocal of the
   // resolution) and the point's (from the division) may differ by one. At 2 cm, PointIndex's radius of 0

@@ -41,11 +41,9 @@ class PointIndex {
              const std::int32_t* subset = nullptr, std::size_t subset_size = 0);
 
   /** Points indexed: the finite ones of those given to build. */
-  std::size_t size() const { return index_.size() + outliers_index_.size(); }
+  std::size_t size() const { return index_.size(); }
   /** The index, as given to build, of one point indexed; -1 if none is. */
-  std::int32_t anyPoint() const {
-    return !index_.empty() ? index_.front() : !outliers_index_.empty() ? outliers_index_.front() : -1;
-  }
+  std::int32_t anyPoint() const { return !index_.empty() ? index_.front() : -1; }
   /** The cell edge: the one given, or the one the last build picked (0.01 m before the first). */
   double resolution() const { return resolution_; }
   bool automatic() const { return automatic_; }
@@ -77,11 +75,11 @@ class PointIndex {
   FastOctTree tree_;
   std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to
   std::vector<std::uint64_t> ranks_;  // per pool word: rank of the first occupied cell under a bitmap word
-  std::vector<std::uint32_t> start_;  // cell rank -> first of its points in xyz_ / index_
-  std::vector<float> xyz_;            // the points, grouped by cell
-  std::vector<std::int32_t> index_;   // their indices as given to build
-  std::vector<float> outliers_xyz_;   // finite points beyond the key range: searched exhaustively
-  std::vector<std::int32_t> outliers_index_;
+  // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
+  // finite points beyond the key range, which every search scans (as a crowded cell, sorted by x).
+  std::vector<std::uint32_t> start_;
+  std::vector<float> xyz_;           // the points, grouped by cell
+  std::vector<std::int32_t> index_;  // their indices as given to build
 };
 
 }  // namespace fot
