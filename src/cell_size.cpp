@@ -46,8 +46,7 @@ struct Edge {
   bool finest;  // the finest edge the box allows: a finer one might be better
 };
 
-/** chooseCellSize on one box [lo, hi], before the clamp: the points of the sample outside it are not counted.
- */
+/** chooseCellSize over the box [lo, hi], before the clamp; the sample's points outside it are not counted. */
 Edge levelEdge(const std::vector<std::array<float, 3>>& sample, std::size_t finite_count, const double lo[3],
                const double hi[3]) {
   const double side = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
