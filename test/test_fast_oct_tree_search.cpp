@@ -1,6 +1,7 @@
 // FastOctTreeSearch against FLANN and brute force: the same distances, to the bit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -126,6 +127,44 @@ TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
       ++n;
     }
     EXPECT_GT(n, 200u);
+  }
+}
+
+TEST(FastOctTreeSearch, EveryKKeepsTheNearestInOrderWithTiesToTheSmallerIndex) {
+  // A lattice in a shuffled order: many points tie. Small k keep their results sorted as they go, large k
+  // in a heap; both must give the brute-force order, ties to the smaller index, for either metric.
+  Cloud::Ptr cloud(new Cloud);
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int k = 0; k < 8; ++k) cloud->push_back(PointXYZ(0.1f * i, 0.1f * j, 0.1f * k));
+  std::mt19937 rng(4);
+  std::shuffle(cloud->begin(), cloud->end(), rng);
+  for (pcl::fot::Metric metric : {pcl::fot::Metric::Euclidean, pcl::fot::Metric::Manhattan}) {
+    Search ours(0.15);
+    ours.setMetric(metric);
+    ours.setInputCloud(cloud);
+    pcl::Indices b;
+    std::vector<float> db;
+    for (std::size_t i = 0; i < cloud->size(); i += 37) {
+      PointXYZ q = (*cloud)[i];
+      q.x += i % 2 ? 0.0f : 0.05f;  // on a lattice point, or halfway to the next
+      std::vector<std::pair<float, pcl::index_t>> all;
+      for (pcl::index_t j = 0; j < pcl::index_t(cloud->size()); ++j) {
+        const float dx = (*cloud)[j].x - q.x, dy = (*cloud)[j].y - q.y, dz = (*cloud)[j].z - q.z;
+        all.emplace_back(metric == pcl::fot::Metric::Euclidean
+                             ? dx * dx + dy * dy + dz * dz
+                             : std::fabs(dx) + std::fabs(dy) + std::fabs(dz),
+                         j);
+      }
+      std::sort(all.begin(), all.end());
+      for (int k : {10, 80, 81, 300, 1000}) {
+        ASSERT_EQ(ours.nearestKSearch(q, k, b, db), k);
+        for (int n = 0; n < k; ++n) {
+          ASSERT_EQ(db[n], all[n].first) << "k " << k << ", result " << n;
+          ASSERT_EQ(b[n], all[n].second) << "k " << k << ", result " << n;
+        }
+      }
+    }
   }
 }
 
