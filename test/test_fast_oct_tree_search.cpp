@@ -163,6 +163,13 @@ TEST(FastOctTreeSearch, EveryKKeepsTheNearestInOrderWithTiesToTheSmallerIndex) {
           ASSERT_EQ(db[n], all[n].first) << "k " << k << ", result " << n;
           ASSERT_EQ(b[n], all[n].second) << "k " << k << ", result " << n;
         }
+        // A radius search with max_nn keeps the same order.
+        const double r = 0.45, bound = metric == pcl::fot::Metric::Euclidean ? r * r : r;
+        const std::size_t within = std::size_t(
+            std::count_if(all.begin(), all.end(), [&](const auto& a) { return double(a.first) <= bound; }));
+        const std::size_t n = ours.radiusSearch(q, r, b, db, unsigned(k));
+        ASSERT_EQ(n, std::min(within, std::size_t(k))) << "radius, max_nn " << k;
+        for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(b[m], all[m].second) << "radius, max_nn " << k;
       }
     }
   }
