@@ -2,9 +2,9 @@
 // input picks a resolution, a bounding box (none, a box or a cube) and a scale for the coordinates, then
 // sets, deletes and queries voxels at points on a grid finer than the voxels, so that many lie on voxel
 // faces. Both must give the same answer to every query, and agree afterwards on the depth, the bounding box,
-// the leaves in order, the voxel centres and bounds, and the branch count. A point that pcl::octree would
-// fail an assertion on (inside the box, but rounding past its last voxel) ends the comparison: ours must
-// then hold it in the box's last voxel.
+// the nodes of every iterator in order, the voxel centres and bounds, and the branch count. A point that
+// pcl::octree would fail an assertion on (inside the box, but rounding past its last voxel) ends the
+// comparison: ours must then hold it in the box's last voxel.
 #include <cstdint>
 #include <cstdlib>
 #include <vector>
@@ -106,18 +106,27 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int k = 0; k < 6; ++k) check(a[k] == b[k]);
   for (const PointXYZ& p : points) check(theirs.isVoxelOccupiedAtPoint(p) == ours.isVoxelOccupiedAtPoint(p));
 
-  auto t = theirs.leaf_depth_begin();
-  auto o = ours.leaf_depth_begin();
-  for (; t != theirs.leaf_depth_end(); ++t, ++o) {
-    check(o != ours.leaf_depth_end());
-    check(t.getCurrentOctreeKey() == o.getCurrentOctreeKey());
-    check(t.getCurrentOctreeDepth() == o.getCurrentOctreeDepth());
-    Eigen::Vector3f tmin, tmax, omin, omax;
-    theirs.getVoxelBounds(t, tmin, tmax);
-    ours.getVoxelBounds(o, omin, omax);
-    check(tmin == omin && tmax == omax);
-  }
-  check(o == ours.leaf_depth_end());
+  // Every iterator, node by node: key, depth, kind, children and bounds.
+  auto sameNodes = [&](auto begin, auto end) {
+    auto t = begin(theirs);
+    auto o = begin(ours);
+    for (; t != end(theirs); ++t, ++o) {
+      check(o != end(ours));
+      check(t.getCurrentOctreeKey() == o.getCurrentOctreeKey());
+      check(t.getCurrentOctreeDepth() == o.getCurrentOctreeDepth());
+      check(t.isLeafNode() == o.isLeafNode() && t.getNodeConfiguration() == o.getNodeConfiguration());
+      Eigen::Vector3f tmin, tmax, omin, omax;
+      theirs.getVoxelBounds(t, tmin, tmax);
+      ours.getVoxelBounds(o, omin, omax);
+      check(tmin == omin && tmax == omax);
+    }
+    check(o == end(ours));
+  };
+  const pcl::uindex_t cut = data[1] % (ours.getTreeDepth() + 1);
+  sameNodes([](auto& x) { return x.leaf_depth_begin(); }, [](auto& x) { return x.leaf_depth_end(); });
+  sameNodes([](auto& x) { return x.begin(); }, [](auto& x) { return x.end(); });
+  sameNodes([&](auto& x) { return x.breadth_begin(cut); }, [](auto& x) { return x.breadth_end(); });
+  sameNodes([&](auto& x) { return x.fixed_depth_begin(cut); }, [](auto& x) { return x.fixed_depth_end(); });
 
   pcl::octree::OctreePointCloudOccupancy<PointXYZ>::AlignedPointTVector tc;
   pcl::fot::OctreePointCloud<PointXYZ>::AlignedPointTVector oc;

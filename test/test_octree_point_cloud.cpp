@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
 #include <pcl/octree/octree_pointcloud_occupancy.h>
@@ -28,6 +29,56 @@ void expectSameCentres(const Reference::AlignedPointTVector& a, const Ours::Alig
     ASSERT_EQ(a[i].y, b[i].y) << "centre " << i;
     ASSERT_EQ(a[i].z, b[i].z) << "centre " << i;
   }
+}
+
+/** Walks an iterator of each octree to its end, node by node: key, depth, kind, children and bounds. */
+template <typename Begin, typename End>
+void expectSameNodes(Reference& ref, const Ours& ours, Begin begin, End end, const std::string& what) {
+  auto rt = begin(ref);
+  auto ot = begin(ours);
+  std::size_t n = 0;
+  for (; rt != end(ref); ++rt, ++ot, ++n) {
+    ASSERT_TRUE(ot != end(ours)) << what << ": ours ends after " << n << " nodes";
+    ASSERT_EQ(rt.getCurrentOctreeKey(), ot.getCurrentOctreeKey()) << what << ", node " << n;
+    ASSERT_EQ(rt.getCurrentOctreeDepth(), ot.getCurrentOctreeDepth()) << what << ", node " << n;
+    ASSERT_EQ(rt.isBranchNode(), ot.isBranchNode()) << what << ", node " << n;
+    ASSERT_EQ(rt.isLeafNode(), ot.isLeafNode()) << what << ", node " << n;
+    ASSERT_EQ(rt.getNodeConfiguration(), ot.getNodeConfiguration()) << what << ", node " << n;
+    Eigen::Vector3f rmin, rmax, omin, omax;
+    ref.getVoxelBounds(rt, rmin, rmax);
+    ours.getVoxelBounds(ot, omin, omax);
+    ASSERT_EQ(rmin, omin) << what << ", node " << n;
+    ASSERT_EQ(rmax, omax) << what << ", node " << n;
+  }
+  EXPECT_TRUE(ot == end(ours)) << what << ": ours goes on after " << n << " nodes";
+}
+
+/** Every PCL iterator, at the full depth and cut short. */
+void expectSameIterators(Reference& ref, const Ours& ours) {
+  const pcl::uindex_t depth = ref.getTreeDepth();
+  for (const pcl::uindex_t max : {pcl::uindex_t(0), pcl::uindex_t(1), depth / 2, depth - 1, depth + 2}) {
+    const std::string at = " to depth " + std::to_string(max);
+    expectSameNodes(
+        ref, ours, [&](auto& t) { return t.begin(max); }, [](auto& t) { return t.end(); },
+        "depth-first" + at);
+    expectSameNodes(
+        ref, ours, [&](auto& t) { return t.breadth_begin(max); }, [](auto& t) { return t.breadth_end(); },
+        "breadth-first" + at);
+    expectSameNodes(
+        ref, ours, [&](auto& t) { return t.leaf_depth_begin(max); },
+        [](auto& t) { return t.leaf_depth_end(); }, "leaves" + at);
+  }
+  for (const pcl::uindex_t d : {pcl::uindex_t(0), pcl::uindex_t(1), depth / 2, depth, depth + 1})
+    expectSameNodes(
+        ref, ours, [&](auto& t) { return t.fixed_depth_begin(d); },
+        [](auto& t) { return t.fixed_depth_end(); }, "fixed depth " + std::to_string(d));
+  std::size_t nodes = 0, branches = 0;
+  for (auto it = ours.begin(); it != ours.end(); ++it) {
+    ++nodes;
+    branches += it.isBranchNode();
+  }
+  EXPECT_EQ(nodes, ref.getBranchCount() + ref.getLeafCount());
+  EXPECT_EQ(branches, ref.getBranchCount());
 }
 
 /** Everything the two octrees can be asked without changing them. */
@@ -76,6 +127,18 @@ void expectSameState(Reference& ref, const Ours& ours) {
   }
   EXPECT_TRUE(bt == ours.leaf_breadth_end());
   EXPECT_EQ(n, ref.getLeafCount());
+
+  expectSameIterators(ref, ours);
+  // Leaves by key: every voxel, its neighbours and keys beyond the box, where PCL drops the high bits.
+  const pcl::uindex_t side = pcl::uindex_t(1) << ref.getTreeDepth();
+  for (auto it = ours.leaf_depth_begin(); it != ours.leaf_depth_end(); ++it) {
+    const pcl::octree::OctreeKey& k = it.getCurrentOctreeKey();
+    ASSERT_TRUE(ref.existLeaf(k.x, k.y, k.z));
+    ASSERT_TRUE(ours.existLeaf(k.x, k.y, k.z));
+    const pcl::uindex_t nx = (k.x + 1) % side;
+    ASSERT_EQ(ref.existLeaf(nx, k.y, k.z), ours.existLeaf(nx, k.y, k.z));
+    ASSERT_FALSE(ours.existLeaf(k.x + side, k.y, k.z));
+  }
 }
 
 /** Every cloud point and random points around the box, through all three overloads. */
@@ -185,6 +248,16 @@ TEST(OctreePointCloud, GrowingAnEmptyBoxAndDeletingVoxels) {
     ref.deleteVoxelAtPoint((*cloud)[i]);
     ours.deleteVoxelAtPoint((*cloud)[i]);
   }
+  expectSameState(ref, ours);
+  std::vector<pcl::octree::OctreeKey> keys;
+  for (auto it = ours.leaf_depth_begin(); it != ours.leaf_depth_end(); ++it)
+    keys.push_back(it.getCurrentOctreeKey());
+  for (std::size_t i = 0; i < keys.size(); i += 7) {
+    ref.removeLeaf(keys[i].x, keys[i].y, keys[i].z);
+    ours.removeLeaf(keys[i].x, keys[i].y, keys[i].z);
+  }
+  const pcl::uindex_t side = pcl::uindex_t(1) << ours.getTreeDepth();
+  ours.removeLeaf(keys[1].x + side, keys[1].y, keys[1].z);  // beyond the box: nothing happens
   expectSameState(ref, ours);
   ref.deleteVoxelAtPoint(far);
   ours.deleteVoxelAtPoint(far);

@@ -29,8 +29,8 @@ namespace fot {
  *
  * Differences from pcl::octree, listed in doc/user_guide.md: leaves hold occupancy, not point indices (as
  * OctreePointCloudOccupancy); there is no serializeTree (see the .fot file format), no dynamic depth, and
- * leaf iterators only; points that are not finite, or that would grow the box beyond ±2^29 cells, are
- * refused with PCL_ERROR rather than asserting.
+ * iterators yield keys and depths, not node pointers; points that are not finite, or that would grow the box
+ * beyond ±2^29 cells, are refused with PCL_ERROR rather than asserting.
  */
 template <typename PointT>
 class OctreePointCloud {
@@ -46,35 +46,67 @@ class OctreePointCloud {
   using AlignedPointXYZVector = std::vector<PointXYZ, Eigen::aligned_allocator<PointXYZ>>;
   using SingleBuffer = OctreePointCloud<PointT>;
 
-  /** Visits the occupied voxels in pcl::octree's depth-first order. */
-  class LeafIterator {
+ private:
+  /** One node of the octree pcl::octree would build. */
+  struct Node {
+    octree::OctreeKey key;
+    uindex_t depth;
+    std::uint8_t children;  // PCL's child bit pattern
+    bool leaf;
+  };
+
+ public:
+  /**
+   * Visits pcl::octree's nodes, branches (the root included) and leaves, in the order of the PCL iterator
+   * it stands for. The nodes are listed when the iterator is made: later changes to the octree are not seen.
+   */
+  class NodeIterator {
    public:
-    LeafIterator() = default;
-    LeafIterator& operator++() {
+    NodeIterator() = default;
+    NodeIterator& operator++() {
       ++at_;
       return *this;
     }
-    bool operator==(const LeafIterator& o) const { return at_ == o.at_; }
-    bool operator!=(const LeafIterator& o) const { return at_ != o.at_; }
-    const octree::OctreeKey& getCurrentOctreeKey() const { return (*keys_)[at_]; }
-    uindex_t getCurrentOctreeDepth() const { return depth_; }
-    bool isLeafNode() const { return true; }
-    bool isBranchNode() const { return false; }
+    NodeIterator operator++(int) {
+      NodeIterator before = *this;
+      ++at_;
+      return before;
+    }
+    /** Iterators at their end are equal, whichever call made them. */
+    bool operator==(const NodeIterator& o) const {
+      return (atEnd() && o.atEnd()) || (nodes_ == o.nodes_ && at_ == o.at_);
+    }
+    bool operator!=(const NodeIterator& o) const { return !(*this == o); }
+    /** As in PCL, a branch's key holds only the bits of its depth. */
+    const octree::OctreeKey& getCurrentOctreeKey() const { return node().key; }
+    uindex_t getCurrentOctreeDepth() const { return node().depth; }
+    bool isLeafNode() const { return node().leaf; }
+    bool isBranchNode() const { return !node().leaf; }
+    /** PCL's bit pattern of a branch's children (bit i: child i exists); 0 for a leaf. */
+    char getNodeConfiguration() const { return static_cast<char>(node().children); }
 
    private:
     friend class OctreePointCloud;
-    LeafIterator(std::shared_ptr<const std::vector<octree::OctreeKey>> keys, std::size_t at, uindex_t depth)
-        : keys_(std::move(keys)), at_(at), depth_(depth) {}
-    std::shared_ptr<const std::vector<octree::OctreeKey>> keys_;
+    explicit NodeIterator(std::shared_ptr<const std::vector<Node>> nodes) : nodes_(std::move(nodes)) {}
+    bool atEnd() const { return !nodes_ || at_ >= nodes_->size(); }
+    const Node& node() const { return (*nodes_)[at_]; }
+    std::shared_ptr<const std::vector<Node>> nodes_;
     std::size_t at_ = 0;
-    uindex_t depth_ = 0;
   };
-  using LeafNodeIterator = LeafIterator;
-  using ConstLeafNodeIterator = LeafIterator;
-  using LeafNodeDepthFirstIterator = LeafIterator;
-  using ConstLeafNodeDepthFirstIterator = LeafIterator;
-  using LeafNodeBreadthFirstIterator = LeafIterator;
-  using ConstLeafNodeBreadthFirstIterator = LeafIterator;
+  using Iterator = NodeIterator;
+  using ConstIterator = NodeIterator;
+  using DepthFirstIterator = NodeIterator;
+  using ConstDepthFirstIterator = NodeIterator;
+  using BreadthFirstIterator = NodeIterator;
+  using ConstBreadthFirstIterator = NodeIterator;
+  using FixedDepthIterator = NodeIterator;
+  using ConstFixedDepthIterator = NodeIterator;
+  using LeafNodeIterator = NodeIterator;
+  using ConstLeafNodeIterator = NodeIterator;
+  using LeafNodeDepthFirstIterator = NodeIterator;
+  using ConstLeafNodeDepthFirstIterator = NodeIterator;
+  using LeafNodeBreadthFirstIterator = NodeIterator;
+  using ConstLeafNodeBreadthFirstIterator = NodeIterator;
 
   /** Throws std::invalid_argument for a resolution VoxelGrid refuses (PCL asserts). */
   OctreePointCloud(const double resolution_arg);
@@ -139,15 +171,35 @@ class OctreePointCloud {
   double getVoxelSquaredDiameter() const { return getVoxelSquaredDiameter(depth_); }
   double getVoxelSquaredSideLen(uindex_t tree_depth_arg) const;
   double getVoxelSquaredSideLen() const { return getVoxelSquaredSideLen(depth_); }
-  void getVoxelBounds(const LeafIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const;
+  /** The bounds of the node's cube, at its depth, as PCL computes them. */
+  void getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const;
 
-  LeafIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const;
-  LeafIterator leaf_depth_end() const;
+  /** Depth-first, children in index order; max_depth_arg 0 means the full depth. */
+  NodeIterator begin(uindex_t max_depth_arg = 0u) const;
+  NodeIterator end() const { return NodeIterator(); }
+  NodeIterator cbegin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
+  NodeIterator cend() const { return end(); }
+  NodeIterator depth_begin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
+  NodeIterator depth_end() const { return end(); }
+  /** Level by level, from the root down. */
+  NodeIterator breadth_begin(uindex_t max_depth_arg = 0u) const;
+  NodeIterator breadth_end() const { return end(); }
+  /** The nodes at one depth, in breadth-first order; none, with PCL_WARN, deeper than the tree. */
+  NodeIterator fixed_depth_begin(uindex_t fixed_depth_arg = 0u) const;
+  NodeIterator fixed_depth_end() const { return end(); }
+  /** The leaves; none when max_depth_arg stops above them. */
+  NodeIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const;
+  NodeIterator leaf_depth_end() const { return end(); }
   /** Every leaf lies at the full depth, so breadth-first order is depth-first order, as in pcl::octree. */
-  LeafIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
+  NodeIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
     return leaf_depth_begin(max_depth_arg);
   }
-  LeafIterator leaf_breadth_end() const { return leaf_depth_end(); }
+  NodeIterator leaf_breadth_end() const { return end(); }
+
+  /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
+  bool existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const;
+  /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
+  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg);
 
   std::size_t getLeafCount() const { return std::size_t(tree_.getOccupiedCount()); }
   /** The branch nodes pcl::octree would hold for these voxels, its root included. */
@@ -176,6 +228,9 @@ class OctreePointCloud {
   void getKeyBitSize();
   /** The occupied voxels' PCL keys in pcl::octree's depth-first order. */
   std::vector<octree::OctreeKey> sortedLeafKeys() const;
+  /** The nodes pcl::octree would hold for these voxels, in its depth-first order, down to max_depth (0: all).
+   */
+  std::vector<Node> depthFirstNodes(uindex_t max_depth) const;
 
   PointCloudConstPtr input_;
   IndicesConstPtr indices_;

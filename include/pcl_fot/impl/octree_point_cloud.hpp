@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <utility>
 
 #include <pcl/common/common.h>
 #include <pcl/common/point_tests.h>
@@ -23,20 +23,26 @@ namespace detail {
 /** The deepest box the adapter follows PCL to: 2^29 cells per axis keeps tree keys in range. */
 constexpr uindex_t kMaxPclDepth = 29;
 
-/** pcl::octree's depth-first order: at each level the child index is x·4 + y·2 + z. */
-inline bool pclOrderLess(const octree::OctreeKey& a, const octree::OctreeKey& b) {
-  const std::uint32_t d[3] = {a.x ^ b.x, a.y ^ b.y, a.z ^ b.z};
-  auto msb_less = [](std::uint32_t p, std::uint32_t q) { return p < q && p < (p ^ q); };
-  int axis = 0;  // at equal highest bits x decides first, then y, then z
-  if (msb_less(d[axis], d[1])) axis = 1;
-  if (msb_less(d[axis], d[2])) axis = 2;
-  const std::uint32_t ka[3] = {a.x, a.y, a.z}, kb[3] = {b.x, b.y, b.z};
-  return ka[axis] < kb[axis];
+/** Moves bit i of v to bit 3i, for v below 2^21. */
+inline std::uint64_t spreadBits3(std::uint64_t v) {
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  return (v | v << 2) & 0x1249249249249249ULL;
 }
 
-inline bool samePrefix(const octree::OctreeKey& a, const octree::OctreeKey& b, unsigned level) {
-  return ((a.x ^ b.x) >> level) == 0 && ((a.y ^ b.y) >> level) == 0 && ((a.z ^ b.z) >> level) == 0;
-}
+/**
+ * A key's place in pcl::octree's depth-first order, where the child index at each level is x·4 + y·2 + z:
+ * the key's bits interleaved, x above y above z.
+ */
+struct PclOrderCode {
+  std::uint64_t high, low;  // bits 28..14 of each axis, then bits 13..0
+  explicit PclOrderCode(const octree::OctreeKey& k)
+      : high(spreadBits3(k.x >> 14) << 2 | spreadBits3(k.y >> 14) << 1 | spreadBits3(k.z >> 14)),
+        low(spreadBits3(k.x & 0x3fff) << 2 | spreadBits3(k.y & 0x3fff) << 1 | spreadBits3(k.z & 0x3fff)) {}
+  bool operator<(const PclOrderCode& o) const { return high < o.high || (high == o.high && low < o.low); }
+};
 
 }  // namespace detail
 
@@ -267,12 +273,25 @@ template <typename PointT>
 void OctreePointCloud<PointT>::deleteVoxelAtPoint(const PointT& point_arg) {
   if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return;
   const octree::OctreeKey key = pclKey(point_arg.x, point_arg.y, point_arg.z);
-  tree_.eraseCell(pclKeyToTreeKey(key));
+  removeLeaf(key.x, key.y, key.z);
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
+  if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return false;
+  return tree_.getCell(pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))) ==
+         CellState::Occupied;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
+  if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return;
+  const Key target = pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg));
+  tree_.eraseCell(target);
   // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
   // so the smallest goes first, and each larger one only once nothing is left inside it.
   std::sort(phantoms_.begin(), phantoms_.end(),
             [](const Phantom& a, const Phantom& b) { return a.level < b.level; });
-  const Key target = pclKeyToTreeKey(key);
   while (!phantoms_.empty()) {
     const Phantom& ph = phantoms_.front();
     const std::int32_t last = std::int32_t((std::int64_t(1) << ph.level) - 1);
@@ -302,12 +321,17 @@ void OctreePointCloud<PointT>::deleteVoxelAtPoint(const index_t& point_idx_arg) 
 
 template <typename PointT>
 std::vector<octree::OctreeKey> OctreePointCloud<PointT>::sortedLeafKeys() const {
-  std::vector<octree::OctreeKey> keys;
-  keys.reserve(getLeafCount());
+  std::vector<std::pair<detail::PclOrderCode, octree::OctreeKey>> coded;
+  coded.reserve(getLeafCount());
   tree_.forEachCell(CellState::Occupied, [&](const Key& k) {
-    keys.emplace_back(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]), uindex_t(k.z - offset_[2]));
+    const octree::OctreeKey key(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]),
+                                uindex_t(k.z - offset_[2]));
+    coded.emplace_back(detail::PclOrderCode(key), key);
   });
-  std::sort(keys.begin(), keys.end(), detail::pclOrderLess);
+  std::sort(coded.begin(), coded.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<octree::OctreeKey> keys;
+  keys.reserve(coded.size());
+  for (const auto& c : coded) keys.push_back(c.second);
   return keys;
 }
 
@@ -323,26 +347,65 @@ uindex_t OctreePointCloud<PointT>::getOccupiedVoxelCenters(AlignedPointTVector& 
 }
 
 template <typename PointT>
-std::size_t OctreePointCloud<PointT>::getBranchCount() const {
+std::vector<typename OctreePointCloud<PointT>::Node> OctreePointCloud<PointT>::depthFirstNodes(
+    uindex_t max_depth) const {
+  if (max_depth == 0 || max_depth > depth_) max_depth = depth_;
+  // The nodes come from markers, in depth-first order: each voxel, and each empty old root that PCL keeps.
+  // Each marker brings the ancestors the previous markers did not.
+  struct Marker {
+    octree::OctreeKey corner;  // the cube's first voxel
+    uindex_t depth;
+  };
+  std::vector<Marker> markers;
   const std::vector<octree::OctreeKey> keys = sortedLeafKeys();
-  std::size_t count = 1;  // the root
-  // In depth-first order the voxels under one branch are contiguous: count the runs per level.
-  for (uindex_t level = 1; level < depth_; ++level)
-    for (std::size_t i = 0; i < keys.size(); ++i)
-      count += i == 0 || !detail::samePrefix(keys[i - 1], keys[i], level);
-  // Empty old roots and their ancestors, unless a voxel already accounts for them.
-  std::set<std::tuple<uindex_t, uindex_t, uindex_t, uindex_t>> extra;
-  for (const Phantom& ph : phantoms_) {
-    const octree::OctreeKey m(uindex_t(ph.min.x - offset_[0]), uindex_t(ph.min.y - offset_[1]),
-                              uindex_t(ph.min.z - offset_[2]));
-    for (uindex_t level = ph.level; level < depth_; ++level) {
-      const auto it = std::lower_bound(keys.begin(), keys.end(), m, detail::pclOrderLess);
-      const bool by_voxel = (it != keys.end() && detail::samePrefix(*it, m, level)) ||
-                            (it != keys.begin() && detail::samePrefix(*(it - 1), m, level));
-      if (!by_voxel) extra.emplace(level, m.x >> level, m.y >> level, m.z >> level);
+  markers.reserve(keys.size() + phantoms_.size());
+  for (const auto& k : keys) markers.push_back({k, depth_});
+  for (const Phantom& ph : phantoms_)
+    markers.push_back({octree::OctreeKey(uindex_t(ph.min.x - offset_[0]), uindex_t(ph.min.y - offset_[1]),
+                                         uindex_t(ph.min.z - offset_[2])),
+                       depth_ - ph.level});
+  // The voxels are in order; the old roots merge in, a cube before what it contains from the same corner.
+  const auto before = [](const Marker& a, const Marker& b) {
+    const detail::PclOrderCode ca(a.corner), cb(b.corner);
+    return ca < cb || (!(cb < ca) && a.depth < b.depth);
+  };
+  const auto voxels_end = markers.begin() + std::ptrdiff_t(keys.size());
+  std::sort(voxels_end, markers.end(), before);
+  std::inplace_merge(markers.begin(), voxels_end, markers.end(), before);
+
+  std::vector<Node> nodes{{octree::OctreeKey(0, 0, 0), 0, 0, false}};
+  nodes.reserve(2 * markers.size() + 1);
+  std::vector<std::size_t> path{0};        // the indices of the last node listed at each depth
+  octree::OctreeKey path_corner(0, 0, 0);  // a voxel in the deepest node on the path
+  for (const Marker& m : markers) {
+    // The path holds m's ancestors down to where their corners part.
+    const std::uint32_t parted =
+        (m.corner.x ^ path_corner.x) | (m.corner.y ^ path_corner.y) | (m.corner.z ^ path_corner.z);
+    const uindex_t shared = depth_ - (parted == 0 ? 0u : 32u - uindex_t(__builtin_clz(parted)));
+    const uindex_t known = std::min({uindex_t(path.size() - 1), shared, m.depth});
+    if (known == m.depth) continue;
+    path.resize(known + 1);
+    for (uindex_t depth = known + 1; depth <= m.depth; ++depth) {
+      const uindex_t shift = depth_ - depth;
+      const octree::OctreeKey key(m.corner.x >> shift, m.corner.y >> shift, m.corner.z >> shift);
+      nodes[path.back()].children |= std::uint8_t(1u << ((key.x & 1) << 2 | (key.y & 1) << 1 | (key.z & 1)));
+      path.push_back(nodes.size());
+      nodes.push_back({key, depth, 0, depth == depth_});
     }
+    path_corner = m.corner;
   }
-  return count + extra.size();
+  // Cut below max_depth only now: the nodes there keep their children's bits, as in PCL.
+  if (max_depth < depth_)
+    nodes.erase(
+        std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth > max_depth; }),
+        nodes.end());
+  return nodes;
+}
+
+template <typename PointT>
+std::size_t OctreePointCloud<PointT>::getBranchCount() const {
+  const std::vector<Node> nodes = depthFirstNodes(0);
+  return std::size_t(std::count_if(nodes.begin(), nodes.end(), [](const Node& n) { return !n.leaf; }));
 }
 
 template <typename PointT>
@@ -433,7 +496,7 @@ double OctreePointCloud<PointT>::getVoxelSquaredSideLen(uindex_t tree_depth_arg)
 }
 
 template <typename PointT>
-void OctreePointCloud<PointT>::getVoxelBounds(const LeafIterator& iterator, Eigen::Vector3f& min_pt,
+void OctreePointCloud<PointT>::getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt,
                                               Eigen::Vector3f& max_pt) const {
   const octree::OctreeKey& key = iterator.getCurrentOctreeKey();
   const double side = std::ldexp(resolution_, int(depth_) - int(iterator.getCurrentOctreeDepth()));
@@ -445,13 +508,45 @@ void OctreePointCloud<PointT>::getVoxelBounds(const LeafIterator& iterator, Eige
 }
 
 template <typename PointT>
-typename OctreePointCloud<PointT>::LeafIterator OctreePointCloud<PointT>::leaf_depth_begin(uindex_t) const {
-  return LeafIterator(std::make_shared<const std::vector<octree::OctreeKey>>(sortedLeafKeys()), 0, depth_);
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::begin(
+    uindex_t max_depth_arg) const {
+  return NodeIterator(std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
 }
 
 template <typename PointT>
-typename OctreePointCloud<PointT>::LeafIterator OctreePointCloud<PointT>::leaf_depth_end() const {
-  return LeafIterator(nullptr, getLeafCount(), depth_);
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::breadth_begin(
+    uindex_t max_depth_arg) const {
+  std::vector<Node> nodes = depthFirstNodes(max_depth_arg);
+  // Depth-first order restricted to one depth is that depth's breadth-first order.
+  std::stable_sort(nodes.begin(), nodes.end(),
+                   [](const Node& a, const Node& b) { return a.depth < b.depth; });
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::fixed_depth_begin(
+    uindex_t fixed_depth_arg) const {
+  if (fixed_depth_arg > depth_) {
+    PCL_WARN(
+        "[pcl::fot::OctreePointCloud::fixed_depth_begin] Depth %u is deeper than the octree (depth %u).\n",
+        fixed_depth_arg, depth_);
+    return end();
+  }
+  std::vector<Node> nodes = depthFirstNodes(fixed_depth_arg);
+  nodes.erase(
+      std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth != fixed_depth_arg; }),
+      nodes.end());
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::leaf_depth_begin(
+    uindex_t max_depth_arg) const {
+  if (max_depth_arg != 0 && max_depth_arg < depth_) return end();
+  std::vector<Node> nodes;
+  nodes.reserve(getLeafCount());
+  for (const auto& key : sortedLeafKeys()) nodes.push_back({key, depth_, 0, true});
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
 template <typename PointT>
