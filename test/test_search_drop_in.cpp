@@ -1,12 +1,20 @@
-// FastOctTreeSearch inside PCL's algorithms: ICP, NormalEstimation, EuclideanClusterExtraction.
+// FastOctTreeSearch inside PCL's algorithms: ICP, GICP, correspondence estimation, NormalEstimation, FPFH,
+// MovingLeastSquares, region growing and EuclideanClusterExtraction.
 #include <gtest/gtest.h>
+
+#include <array>
 
 #include <pcl/common/point_tests.h>
 #include <pcl/common/transforms.h>
+#include <pcl/features/fpfh.h>
 #include <pcl/features/normal_3d.h>
 #include <pcl/filters/voxel_grid.h>
+#include <pcl/registration/correspondence_estimation.h>
+#include <pcl/registration/gicp.h>
 #include <pcl/registration/icp.h>
 #include <pcl/segmentation/extract_clusters.h>
+#include <pcl/segmentation/region_growing.h>
+#include <pcl/surface/mls.h>
 
 #include <pcl_fot/search/fast_oct_tree_search.h>
 
@@ -182,4 +190,100 @@ TEST(SearchDropIn, EuclideanClustersAreTheSame) {
   const auto got = clusters(Search::Ptr(new Search(0.05)));
   EXPECT_GT(expected.size(), 3u);
   EXPECT_EQ(expected, got);
+}
+
+/**
+ * Each algorithm run twice on a room scan, once with KdTree and once with ours, as setSearchMethod takes
+ * them: the results agree to float rounding (neighbours at equal distance may come in another order).
+ */
+TEST(SearchDropIn, FeaturesSurfacesSegmentationAndGicpAsWithKdTree) {
+  Cloud::Ptr cloud(new Cloud), moved(new Cloud);
+  pcl::VoxelGrid<PointXYZ> grid;
+  grid.setInputCloud(pcl_fot_test::loadScan("room_scan1.pcd"));
+  grid.setLeafSize(0.08f, 0.08f, 0.08f);
+  grid.filter(*cloud);
+  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
+  pcl::NormalEstimation<PointXYZ, pcl::Normal> ne;
+  ne.setInputCloud(cloud);
+  ne.setRadiusSearch(0.25);
+  ne.compute(*normals);
+  using KdTree = pcl::search::KdTree<PointXYZ>;
+  const auto make = [](bool ours) { return ours ? KdTree::Ptr(new Search) : KdTree::Ptr(new KdTree); };
+
+  std::array<pcl::PointCloud<pcl::FPFHSignature33>, 2> fpfh;
+  std::array<pcl::PointCloud<pcl::PointNormal>, 2> mls;
+  std::array<std::vector<pcl::PointIndices>, 2> regions;
+  std::array<pcl::Correspondences, 2> reciprocal;
+  std::array<Eigen::Matrix4f, 2> gicp;
+  const Eigen::Affine3f truth =
+      Eigen::Translation3f(0.2f, -0.1f, 0.03f) * Eigen::AngleAxisf(0.05f, Eigen::Vector3f::UnitZ());
+  pcl::transformPointCloud(*cloud, *moved, truth.inverse());
+  for (const bool ours : {false, true}) {
+    pcl::FPFHEstimation<PointXYZ, pcl::Normal, pcl::FPFHSignature33> f;
+    f.setInputCloud(cloud);
+    f.setInputNormals(normals);
+    f.setSearchMethod(make(ours));
+    f.setRadiusSearch(0.4);
+    f.compute(fpfh[ours]);
+
+    pcl::MovingLeastSquares<PointXYZ, pcl::PointNormal> m;
+    m.setInputCloud(cloud);
+    m.setSearchMethod(make(ours));
+    m.setSearchRadius(0.25);
+    m.setComputeNormals(true);
+    m.process(mls[ours]);
+
+    pcl::RegionGrowing<PointXYZ, pcl::Normal> rg;
+    rg.setInputCloud(cloud);
+    rg.setInputNormals(normals);
+    rg.setSearchMethod(make(ours));
+    rg.setNumberOfNeighbours(30);
+    rg.setMinClusterSize(30);
+    rg.extract(regions[ours]);
+
+    pcl::registration::CorrespondenceEstimation<PointXYZ, PointXYZ> ce;
+    ce.setInputSource(moved);
+    ce.setInputTarget(cloud);
+    ce.setSearchMethodSource(make(ours));
+    ce.setSearchMethodTarget(make(ours));
+    ce.determineReciprocalCorrespondences(reciprocal[ours], 0.3);
+
+    pcl::GeneralizedIterativeClosestPoint<PointXYZ, PointXYZ> g;
+    g.setSearchMethodSource(make(ours));
+    g.setSearchMethodTarget(make(ours));
+    g.setInputSource(moved);
+    g.setInputTarget(cloud);
+    g.setMaxCorrespondenceDistance(0.5);
+    Cloud aligned;
+    g.align(aligned);
+    ASSERT_TRUE(g.hasConverged());
+    gicp[ours] = g.getFinalTransformation();
+  }
+
+  ASSERT_EQ(fpfh[0].size(), cloud->size());
+  ASSERT_EQ(fpfh[1].size(), cloud->size());
+  for (std::size_t i = 0; i < cloud->size(); ++i)
+    for (int b = 0; b < 33; ++b)
+      ASSERT_NEAR(fpfh[0][i].histogram[b], fpfh[1][i].histogram[b], 1e-3) << "FPFH of point " << i;
+  ASSERT_GT(mls[0].size(), cloud->size() / 2);
+  ASSERT_EQ(mls[0].size(), mls[1].size());
+  for (std::size_t i = 0; i < mls[0].size(); ++i) {
+    ASSERT_NEAR(mls[0][i].x, mls[1][i].x, 1e-5) << "MLS point " << i;
+    ASSERT_NEAR(mls[0][i].y, mls[1][i].y, 1e-5) << "MLS point " << i;
+    ASSERT_NEAR(mls[0][i].z, mls[1][i].z, 1e-5) << "MLS point " << i;
+    ASSERT_NEAR(mls[0][i].normal_z, mls[1][i].normal_z, 1e-4) << "MLS point " << i;
+  }
+  ASSERT_GT(regions[0].size(), 3u);
+  ASSERT_EQ(regions[0].size(), regions[1].size());
+  for (std::size_t r = 0; r < regions[0].size(); ++r) EXPECT_EQ(regions[0][r].indices, regions[1][r].indices);
+  ASSERT_GT(reciprocal[0].size(), cloud->size() / 4);
+  ASSERT_EQ(reciprocal[0].size(), reciprocal[1].size());
+  for (std::size_t i = 0; i < reciprocal[0].size(); ++i) {
+    ASSERT_EQ(reciprocal[0][i].index_query, reciprocal[1][i].index_query);
+    ASSERT_EQ(reciprocal[0][i].index_match, reciprocal[1][i].index_match);
+    ASSERT_EQ(reciprocal[0][i].distance, reciprocal[1][i].distance);
+  }
+  EXPECT_TRUE(gicp[1].isApprox(gicp[0], 1e-5f)) << gicp[1] << "\nagainst\n" << gicp[0];
+  const Eigen::Matrix4f error = gicp[1] * truth.inverse().matrix();
+  EXPECT_LT((error.block<3, 1>(0, 3)).norm(), 1e-3);
 }
