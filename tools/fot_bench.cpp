@@ -31,7 +31,7 @@ void printHelp(const char* prog) {
       "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
       "  -ray_repeats <n>   rounds of the ray tracing, search and psi timings (default: 5)\n"
       "  -dmap_repeats <n>  runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
-      "  -sections <list>   comma-separated subset of: cells,rays,search,psi (default: all)\n"
+      "  -sections <list>   comma-separated subset of: cells,rays,search,algorithms,psi (default: all)\n"
       "  -h                 this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 missing scans or a report that cannot be written.\n",
       prog);
@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
       printHelp("fot_bench");
       return kExitOk;
     }
-    std::string data_dir = "../shared/data", out = "doc/benchmarks.md", sections = "cells,rays,search,psi";
+    std::string data_dir = "../shared/data", out = "doc/benchmarks.md",
+                sections = "cells,rays,search,algorithms,psi";
     int repeats = 20, ray_repeats = 5, dmap_repeats = 3;
     args.get("-data", data_dir);
     args.get("-out", out);
@@ -90,6 +91,7 @@ int main(int argc, char** argv) {
     if (wanted("cells")) md << fot_bench::benchCellAccess(scans, repeats) << "\n";
     if (wanted("rays")) md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
     if (wanted("search")) md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
+    if (wanted("algorithms")) md << fot_bench::benchPclAlgorithms(scans, ray_repeats) << "\n";
     const std::string doc_dir = out.find('/') == std::string::npos ? "." : out.substr(0, out.rfind('/'));
     if (wanted("psi"))
       md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, doc_dir + "/psi_random_maps.png") << "\n";

@@ -11,6 +11,9 @@ namespace fot_bench {
 std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats);
 std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats);
 std::string benchSearch(const std::vector<BenchScan>& scans, int repeats);
+/** PCL's features, surface, segmentation and registration algorithms with KdTree and with FastOctTreeSearch.
+ */
+std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats);
 /** Also plots Fig. 5 into plot_file (PNG, with gnuplot), which the Markdown links by its file name. */
 std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats,
                      const std::string& plot_file);
