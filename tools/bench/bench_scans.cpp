@@ -1,6 +1,7 @@
 #include "bench_scans.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include <pcl/common/common.h>
 
@@ -37,6 +38,12 @@ std::vector<BenchScan> loadBenchScans(const std::string& data_dir) {
     scans.push_back(scan);
   }
   return scans;
+}
+
+const BenchScan& findScan(const std::vector<BenchScan>& scans, const std::string& name) {
+  for (const auto& s : scans)
+    if (s.name == name) return s;
+  throw std::runtime_error("missing scan " + name);
 }
 
 }  // namespace fot_bench

@@ -177,20 +177,14 @@ void benchScan(const BenchScan& scan, double res, int repeats, Table& table, std
   }
 }
 
-const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& name) {
-  for (const auto& s : scans)
-    if (s.name == name) return s;
-  throw std::runtime_error("missing scan " + name);
-}
-
 }  // namespace
 
 std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats) {
   Table table({"scan", "points", "algorithm", "setting", "KdTree (FLANN) ms", "FastOctTreeSearch ms",
                "KdTree / FOT", "results"});
   std::vector<double> ratios;
-  benchScan(find(scans, "room_scan1"), 0.05, repeats, table, ratios);
-  benchScan(find(scans, "kinect_capture0001"), 0.01, repeats, table, ratios);
+  benchScan(findScan(scans, "room_scan1"), 0.05, repeats, table, ratios);
+  benchScan(findScan(scans, "kinect_capture0001"), 0.01, repeats, table, ratios);
   const auto [lo, hi] = std::minmax_element(ratios.begin(), ratios.end());
   return "## PCL's algorithms with FastOctTreeSearch\n\n" +
          format(

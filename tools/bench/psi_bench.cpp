@@ -296,12 +296,6 @@ std::string figure5(int repeats, const std::string& plot_file, std::vector<std::
          std::to_string(repeats) + " runs, dmap_v one run. Log axes.\n\n" + plot + t.markdown();
 }
 
-const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& name) {
-  for (const auto& s : scans)
-    if (s.name == name) return s;
-  throw std::runtime_error("missing scan " + name);
-}
-
 }  // namespace
 
 std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats,
@@ -309,9 +303,9 @@ std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_
   const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
   const Eigen::Affine3f ndt_guess =
       Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) * Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
-  const BenchScan &k1 = find(scans, "kinect_capture0001"), &k2 = find(scans, "kinect_capture0002"),
-                  &k3 = find(scans, "kinect_capture0003"), &r1 = find(scans, "room_scan1"),
-                  &r2 = find(scans, "room_scan2");
+  const BenchScan &k1 = findScan(scans, "kinect_capture0001"), &k2 = findScan(scans, "kinect_capture0002"),
+                  &k3 = findScan(scans, "kinect_capture0003"), &r1 = findScan(scans, "room_scan1"),
+                  &r2 = findScan(scans, "room_scan2");
   std::vector<MapPair> pairs;
   for (double res : {0.05, 0.02, 0.01}) {
     pairs.push_back(scanPair(k1, k2, res, identity, "kinect 1 / 2"));

@@ -394,28 +394,22 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
          t.markdown() + "\n";
 }
 
-const BenchScan& find(const std::vector<BenchScan>& scans, const std::string& name) {
-  for (const auto& s : scans)
-    if (s.name == name) return s;
-  throw std::runtime_error("missing scan " + name);
-}
-
 }  // namespace
 
 std::string benchSearch(const std::vector<BenchScan>& scans, int repeats) {
   std::vector<std::string> verdicts;
   std::string body;
-  body += pointLevel(find(scans, "kinect_capture0001"), find(scans, "kinect_capture0002"), 0.03, repeats,
-                     verdicts);
-  body += pointLevel(find(scans, "room_scan1"), find(scans, "room_scan2"), 0.1, repeats, verdicts);
-  body += featureQueries({{"kinect_capture0001", find(scans, "kinect_capture0001").cloud},
-                          {"room_scan1", find(scans, "room_scan1").cloud},
-                          {"terrain_samp11", find(scans, "terrain_samp11").cloud},
+  body += pointLevel(findScan(scans, "kinect_capture0001"), findScan(scans, "kinect_capture0002"), 0.03,
+                     repeats, verdicts);
+  body += pointLevel(findScan(scans, "room_scan1"), findScan(scans, "room_scan2"), 0.1, repeats, verdicts);
+  body += featureQueries({{"kinect_capture0001", findScan(scans, "kinect_capture0001").cloud},
+                          {"room_scan1", findScan(scans, "room_scan1").cloud},
+                          {"terrain_samp11", findScan(scans, "terrain_samp11").cloud},
                           {"LiDAR sweep (synthetic)", lidarSweep()}},
                          repeats, verdicts);
-  body += voxelLevel(find(scans, "kinect_capture0001"), find(scans, "kinect_capture0002"), 0.01, repeats,
-                     verdicts);
-  body += voxelLevel(find(scans, "room_scan1"), find(scans, "room_scan2"), 0.05, repeats, verdicts);
+  body += voxelLevel(findScan(scans, "kinect_capture0001"), findScan(scans, "kinect_capture0002"), 0.01,
+                     repeats, verdicts);
+  body += voxelLevel(findScan(scans, "room_scan1"), findScan(scans, "room_scan2"), 0.05, repeats, verdicts);
 
   std::string out = "## Nearest-neighbour search (paper §IV)\n\n";
   out += format(
