@@ -29,7 +29,7 @@ void printHelp(const char* prog) {
       "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside "
       "it\n"
       "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
-      "  -ray_repeats <n>   rounds of the ray tracing, search and psi timings (default: 5)\n"
+      "  -ray_repeats <n>   rounds of the ray tracing, search, algorithm and psi timings (default: 5)\n"
       "  -dmap_repeats <n>  runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
       "  -sections <list>   comma-separated subset of: cells,rays,search,algorithms,psi (default: all)\n"
       "  -h                 this help\n\n"
