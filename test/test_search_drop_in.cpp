@@ -1,5 +1,6 @@
-// FastOctTreeSearch inside PCL's algorithms: ICP, GICP, correspondence estimation, NormalEstimation, FPFH,
-// MovingLeastSquares, region growing and EuclideanClusterExtraction.
+// FastOctTreeSearch inside PCL's algorithms: ICP, GICP, correspondence estimation, NormalEstimation (and its
+// OpenMP form), FPFH, MovingLeastSquares, greedy triangulation, ISS keypoints, region growing and
+// EuclideanClusterExtraction.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -8,12 +9,15 @@
 #include <pcl/common/transforms.h>
 #include <pcl/features/fpfh.h>
 #include <pcl/features/normal_3d.h>
+#include <pcl/features/normal_3d_omp.h>
 #include <pcl/filters/voxel_grid.h>
+#include <pcl/keypoints/iss_3d.h>
 #include <pcl/registration/correspondence_estimation.h>
 #include <pcl/registration/gicp.h>
 #include <pcl/registration/icp.h>
 #include <pcl/segmentation/extract_clusters.h>
 #include <pcl/segmentation/region_growing.h>
+#include <pcl/surface/gp3.h>
 #include <pcl/surface/mls.h>
 
 #include <pcl_fot/search/fast_oct_tree_search.h>
@@ -142,6 +146,26 @@ TEST(SearchDropIn, NormalEstimationGivesTheSameNormals) {
     ne.setSearchMethod(ours);
     ne.compute(with_fot);
     ASSERT_EQ(with_kdtree.size(), with_fot.size());
+
+    // OpenMP threads share one search, as NormalEstimationOMP runs it: the same normals to the bit.
+    pcl::NormalEstimationOMP<PointXYZ, pcl::Normal> threaded(4);
+    threaded.setInputCloud(cloud);
+    if (by_radius)
+      threaded.setRadiusSearch(radius);
+    else
+      threaded.setKSearch(k);
+    threaded.setSearchMethod(ours);
+    pcl::PointCloud<pcl::Normal> with_fot_threads;
+    threaded.compute(with_fot_threads);
+    ASSERT_EQ(with_fot_threads.size(), with_fot.size());
+    for (std::size_t i = 0; i < with_fot.size(); ++i) {
+      const auto& x = with_fot[i];
+      const auto& y = with_fot_threads[i];
+      const std::array<float, 4> a{x.normal_x, x.normal_y, x.normal_z, x.curvature},
+          b{y.normal_x, y.normal_y, y.normal_z, y.curvature};
+      for (int c = 0; c < 4; ++c)
+        ASSERT_TRUE(a[c] == b[c] || (std::isnan(a[c]) && std::isnan(b[c]))) << "threaded, point " << i;
+    }
     std::size_t compared = 0, skipped = 0;
     for (std::size_t i = 0; i < with_fot.size(); ++i) {
       const auto& x = with_kdtree[i];
@@ -196,7 +220,7 @@ TEST(SearchDropIn, EuclideanClustersAreTheSame) {
  * Each algorithm run twice on a room scan, once with KdTree and once with ours, as setSearchMethod takes
  * them: the results agree to float rounding (neighbours at equal distance may come in another order).
  */
-TEST(SearchDropIn, FeaturesSurfacesSegmentationAndGicpAsWithKdTree) {
+TEST(SearchDropIn, FeaturesSurfacesKeypointsSegmentationAndGicpAsWithKdTree) {
   Cloud::Ptr cloud(new Cloud), moved(new Cloud);
   pcl::VoxelGrid<PointXYZ> grid;
   grid.setInputCloud(pcl_fot_test::loadScan("room_scan1.pcd"));
@@ -215,6 +239,11 @@ TEST(SearchDropIn, FeaturesSurfacesSegmentationAndGicpAsWithKdTree) {
   std::array<std::vector<pcl::PointIndices>, 2> regions;
   std::array<pcl::Correspondences, 2> reciprocal;
   std::array<Eigen::Matrix4f, 2> gicp;
+  std::array<pcl::PolygonMesh, 2> meshes;
+  std::array<Cloud, 2> keypoints;
+  pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(new pcl::PointCloud<pcl::PointNormal>);
+  pcl::concatenateFields(*cloud, *normals, *with_normals);
+  using NormalSearch = pcl::search::KdTree<pcl::PointNormal>;
   const Eigen::Affine3f truth =
       Eigen::Translation3f(0.2f, -0.1f, 0.03f) * Eigen::AngleAxisf(0.05f, Eigen::Vector3f::UnitZ());
   pcl::transformPointCloud(*cloud, *moved, truth.inverse());
@@ -232,6 +261,24 @@ TEST(SearchDropIn, FeaturesSurfacesSegmentationAndGicpAsWithKdTree) {
     m.setSearchRadius(0.25);
     m.setComputeNormals(true);
     m.process(mls[ours]);
+
+    pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
+    gp3.setInputCloud(with_normals);
+    gp3.setSearchMethod(ours ? NormalSearch::Ptr(new pcl::fot::search::FastOctTreeSearch<pcl::PointNormal>)
+                             : NormalSearch::Ptr(new NormalSearch));
+    gp3.setSearchRadius(0.4);
+    gp3.setMu(2.5);
+    gp3.setMaximumNearestNeighbors(100);
+    gp3.reconstruct(meshes[ours]);
+
+    pcl::ISSKeypoint3D<PointXYZ, PointXYZ> iss;
+    iss.setInputCloud(cloud);
+    iss.setSearchMethod(make(ours));
+    iss.setSalientRadius(0.48);
+    iss.setNonMaxRadius(0.32);
+    iss.setMinNeighbors(5);
+    iss.setNumberOfThreads(2);
+    iss.compute(keypoints[ours]);
 
     pcl::RegionGrowing<PointXYZ, pcl::Normal> rg;
     rg.setInputCloud(cloud);
@@ -272,6 +319,14 @@ TEST(SearchDropIn, FeaturesSurfacesSegmentationAndGicpAsWithKdTree) {
     ASSERT_NEAR(mls[0][i].y, mls[1][i].y, 1e-5) << "MLS point " << i;
     ASSERT_NEAR(mls[0][i].z, mls[1][i].z, 1e-5) << "MLS point " << i;
   }
+  ASSERT_GT(meshes[0].polygons.size(), cloud->size() / 2);
+  ASSERT_EQ(meshes[0].polygons.size(), meshes[1].polygons.size());
+  for (std::size_t i = 0; i < meshes[0].polygons.size(); ++i)
+    ASSERT_EQ(meshes[0].polygons[i].vertices, meshes[1].polygons[i].vertices) << "triangle " << i;
+  ASSERT_GT(keypoints[0].size(), 10u);
+  ASSERT_EQ(keypoints[0].size(), keypoints[1].size());
+  for (std::size_t i = 0; i < keypoints[0].size(); ++i)
+    ASSERT_EQ(keypoints[0][i].getVector3fMap(), keypoints[1][i].getVector3fMap()) << "ISS keypoint " << i;
   ASSERT_GT(regions[0].size(), 3u);
   ASSERT_EQ(regions[0].size(), regions[1].size());
   for (std::size_t r = 0; r < regions[0].size(); ++r) EXPECT_EQ(regions[0][r].indices, regions[1][r].indices);
