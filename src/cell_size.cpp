@@ -82,7 +82,28 @@ Edge levelEdge(const std::vector<std::array<float, 3>>& sample, std::size_t fini
   return {side, false};
 }
 
+/** Adds to blocks[k], for each level k up to `level`, the blocks below w that hold an occupied cell. */
+void countBlocks(const NodeWord* words, NodeWord w, unsigned level, std::vector<double>& blocks) {
+  if (node::isBitmap(w)) {
+    const unsigned octants = node::popcount(node::octantMask(w, CellState::Occupied));
+    if (octants == 0) return;
+    blocks[level] += 1.0;
+    for (unsigned k = 0; k < level; ++k) blocks[k] += std::ldexp(double(octants), int(3 * (level - 1 - k)));
+    return;
+  }
+  blocks[level] += 1.0;  // a point index's tree branches only towards occupied cells
+  for (unsigned o = 0; o < 8; ++o) countBlocks(words, words[node::childBase(w) + o], level - 1, blocks);
+}
+
 }  // namespace
+
+double coarserCellSize(const FastOctTree& tree, std::size_t points) {
+  std::vector<double> blocks(tree.rootLevel() + 1, 0.0);
+  countBlocks(tree.words(), tree.rootWord(), tree.rootLevel(), blocks);
+  unsigned k = 1;
+  while (k < tree.rootLevel() && double(points) < kPointsPerCell * blocks[k]) ++k;
+  return std::clamp(std::ldexp(tree.getResolution(), int(k)), kFinestCell, kCoarsestCell);
+}
 
 void bulkBox(const std::vector<std::array<float, 3>>& sample, const double lo[3], const double hi[3],
              double bulk_lo[3], double bulk_hi[3]) {

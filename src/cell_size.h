@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <vector>
 
+#include <pcl_fot/fast_oct_tree.h>
+
 namespace pcl {
 namespace fot {
 namespace detail {
@@ -38,6 +40,13 @@ void bulkBox(const std::vector<std::array<float, 3>>& sample, const double lo[3]
 double chooseCellSize(const std::vector<std::array<float, 3>>& sample, std::size_t finite_count,
                       const double lo[3], const double hi[3], const double bulk_lo[3],
                       const double bulk_hi[3]);
+
+/**
+ * The edge for `points` points in `tree`'s occupied cells: the tree's edge times the smallest 2^k at which
+ * the tree's aligned blocks of 2^k cells per axis that hold any occupied cell hold kPointsPerCell points on
+ * average; within [kFinestCell, kCoarsestCell].
+ */
+double coarserCellSize(const FastOctTree& tree, std::size_t points);
 
 }  // namespace detail
 }  // namespace fot

@@ -257,59 +257,72 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
       lo[a] = std::min(lo[a], double(point(std::size_t(i))[a])),
       hi[a] = std::max(hi[a], double(point(std::size_t(i))[a]));
   }
-  double origin[3] = {0, 0, 0};
-  if (finite > 0) {
-    // An even sample of the points (all of them up to kCellSizeSample) gives their bulk, when needed.
-    std::vector<std::array<float, 3>> sample;
-    double bulk_lo[3], bulk_hi[3];
-    auto findBulk = [&] {
-      const std::size_t m = std::min(n, detail::kCellSizeSample);
-      sample.reserve(m);
-      for (std::size_t s = 0; s < m; ++s) {
-        const std::int64_t i = source(s * n / m);
-        if (i >= 0)
-          sample.push_back({point(std::size_t(i))[0], point(std::size_t(i))[1], point(std::size_t(i))[2]});
-      }
-      detail::bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
-    };
-    if (automatic_) {
-      findBulk();
-      resolution_ = detail::chooseCellSize(sample, finite, lo, hi, bulk_lo, bulk_hi);
+  // An even sample of the points (all of them up to kCellSizeSample) gives their bulk, when needed.
+  std::vector<std::array<float, 3>> sample;
+  double bulk_lo[3], bulk_hi[3];
+  auto findBulk = [&] {
+    const std::size_t m = std::min(n, detail::kCellSizeSample);
+    sample.reserve(m);
+    for (std::size_t s = 0; s < m; ++s) {
+      const std::int64_t i = source(s * n / m);
+      if (i >= 0)
+        sample.push_back({point(std::size_t(i))[0], point(std::size_t(i))[1], point(std::size_t(i))[2]});
     }
-    // The grid is centred on the points, or on their bulk when they reach further than its keys: then a few
-    // stray points far away become the outliers, rather than the bulk.
-    const double reach = 2.0 * double(kMaxKey) * resolution_;
-    const bool fits = hi[0] - lo[0] <= reach && hi[1] - lo[1] <= reach && hi[2] - lo[2] <= reach;
-    if (!fits && sample.empty()) findBulk();
-    for (int a = 0; a < 3; ++a)
-      origin[a] =
-          std::floor(0.5 * (fits ? lo[a] + hi[a] : bulk_lo[a] + bulk_hi[a]) / resolution_) * resolution_;
+    detail::bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
+  };
+  if (finite > 0 && automatic_) {
+    findBulk();
+    resolution_ = detail::chooseCellSize(sample, finite, lo, hi, bulk_lo, bulk_hi);
   }
-  // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the points
-  // beyond its key range are outliers.
-  if (!VoxelGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
-    std::fill(origin, origin + 3, 0.0);
-  tree_ = FastOctTree(VoxelGrid(resolution_, origin[0], origin[1], origin[2]));
-  build_id_ = next_build_id++;
 
   std::vector<Key> keys;
   std::vector<std::int32_t> ids, outliers;  // outliers: finite points beyond the key range
   keys.reserve(n);
   ids.reserve(n);
-  Accessor writer(tree_);
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::int64_t i = source(j);
-    if (i < 0) continue;
-    const float* p = point(std::size_t(i));
-    Key key;
-    if (!tree_.getGrid().pointToKey(p[0], p[1], p[2], key)) {
-      outliers.push_back(std::int32_t(i));
-      continue;
+  auto insertPoints = [&] {
+    double origin[3] = {0, 0, 0};
+    if (finite > 0) {
+      // The grid is centred on the points, or on their bulk when they reach further than its keys: then a
+      // few stray points far away become the outliers, rather than the bulk.
+      const double reach = 2.0 * double(kMaxKey) * resolution_;
+      const bool fits = hi[0] - lo[0] <= reach && hi[1] - lo[1] <= reach && hi[2] - lo[2] <= reach;
+      if (!fits && sample.empty()) findBulk();
+      for (int a = 0; a < 3; ++a)
+        origin[a] =
+            std::floor(0.5 * (fits ? lo[a] + hi[a] : bulk_lo[a] + bulk_hi[a]) / resolution_) * resolution_;
     }
-    writer.setValidCell(key, CellState::Occupied);
-    keys.push_back(key);
-    ids.push_back(std::int32_t(i));
+    // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the
+    // points beyond its key range are outliers.
+    if (!VoxelGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
+      std::fill(origin, origin + 3, 0.0);
+    tree_ = FastOctTree(VoxelGrid(resolution_, origin[0], origin[1], origin[2]));
+    keys.clear();
+    ids.clear();
+    outliers.clear();
+    Accessor writer(tree_);
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::int64_t i = source(j);
+      if (i < 0) continue;
+      const float* p = point(std::size_t(i));
+      Key key;
+      if (!tree_.getGrid().pointToKey(p[0], p[1], p[2], key)) {
+        outliers.push_back(std::int32_t(i));
+        continue;
+      }
+      writer.setValidCell(key, CellState::Occupied);
+      keys.push_back(key);
+      ids.push_back(std::int32_t(i));
+    }
+  };
+  insertPoints();
+  // A sample sees few of the sparse cells, so where occupancy varies (a LiDAR's returns: dense near, sparse
+  // far) the edge it gives can be several times too fine. The tree counts its cells exactly: then it gives
+  // the edge, and the points go in again.
+  if (automatic_ && double(keys.size()) < 0.5 * detail::kPointsPerCell * double(tree_.getOccupiedCount())) {
+    resolution_ = detail::coarserCellSize(tree_, keys.size());
+    insertPoints();
   }
+  build_id_ = next_build_id++;
 
   ranks_.assign(tree_.poolWords(), 0);
   const std::uint64_t cells = assignRanks(tree_, tree_.rootWord(), 0, tree_.rootLevel(), 0, ranks_);

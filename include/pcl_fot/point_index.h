@@ -25,7 +25,8 @@ class PointIndex {
   /**
    * An index that picks its cell edge at each build: the finest at which the occupied cells hold 8 points
    * on average, where k-NN and radius searches run about fastest (doc/benchmarks.md). It counts cells on up
-   * to 65,536 of the points, evenly spaced in the input, and estimates beyond.
+   * to 65,536 of the points, evenly spaced in the input, and estimates beyond; if the tree then holds fewer
+   * than 4 points per cell, it takes the edge from the tree's exact counts and inserts the points again.
    */
   PointIndex();
   /**

@@ -296,15 +296,21 @@ std::string voxelLevel(const BenchScan& target, const BenchScan& source, double 
          t.markdown() + "\n";
 }
 
-/** A spinning LiDAR's sweep (synthetic): 32 rings of 2,000 returns from 2 to 80 m, dense near, sparse far. */
-Cloud::Ptr lidarSweep() {
+/**
+ * A spinning LiDAR's sweep (synthetic, seeded): `rings` rings from 25° below the horizon to `top` degrees
+ * above, of `steps` returns each, from `near` to `far` m, dense near and sparse far; with ground `ground` m
+ * below the sensor if it is not 0.
+ */
+Cloud::Ptr lidarSweep(int rings, int steps, float top, float near, float far, float ground) {
   Cloud::Ptr cloud(new Cloud);
   std::mt19937 gen(7);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  for (int ring = 0; ring < 32; ++ring)
-    for (int step = 0; step < 2000; ++step) {
-      const float elevation = float(M_PI / 180.0) * (-25.0f + 35.0f * float(ring) / 31.0f);
-      const float azimuth = float(2.0 * M_PI) * float(step) / 2000.0f, range = 2.0f + 78.0f * u(gen) * u(gen);
+  for (int ring = 0; ring < rings; ++ring)
+    for (int step = 0; step < steps; ++step) {
+      const float elevation = float(M_PI / 180.0) * (-25.0f + (25.0f + top) * float(ring) / float(rings - 1));
+      const float azimuth = float(2.0 * M_PI) * float(step) / float(steps);
+      float range = near + (far - near) * u(gen) * u(gen);
+      if (ground != 0.0f && elevation < 0.0f) range = std::min(range, ground / -std::sin(elevation));
       cloud->push_back(pcl::PointXYZ(range * std::cos(elevation) * std::cos(azimuth),
                                      range * std::cos(elevation) * std::sin(azimuth),
                                      range * std::sin(elevation)));
@@ -388,8 +394,10 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
              "itself, as NormalEstimation queries, k = 10 and 50, and 300 for a large neighbourhood; build "
              "plus queries, medians of %d rounds, every method in turn in each round. FOT is "
              "`FastOctTreeSearch` made as a `KdTree` is, with no cell size: it picks its own. The LiDAR "
-             "sweep is synthetic (32 rings of 2,000 returns, 2 to 80 m, "
-             "seeded); the others are the real scans.\n\n",
+             "sweeps are synthetic and seeded: 32 rings of 2,000 returns from 2 to 80 m, and 64 rings of "
+             "8,000 "
+             "from 1 to 120 m over flat ground 1.8 m below the sensor, thousands of points in a cell near it "
+             "and one far away; the others are the real scans.\n\n",
              repeats) +
          t.markdown() + "\n";
 }
@@ -405,7 +413,8 @@ std::string benchSearch(const std::vector<BenchScan>& scans, int repeats) {
   body += featureQueries({{"kinect_capture0001", findScan(scans, "kinect_capture0001").cloud},
                           {"room_scan1", findScan(scans, "room_scan1").cloud},
                           {"terrain_samp11", findScan(scans, "terrain_samp11").cloud},
-                          {"LiDAR sweep (synthetic)", lidarSweep()}},
+                          {"LiDAR sweep (synthetic)", lidarSweep(32, 2000, 10.0f, 2.0f, 80.0f, 0.0f)},
+                          {"dense LiDAR sweep (synthetic)", lidarSweep(64, 8000, 15.0f, 1.0f, 120.0f, 1.8f)}},
                          repeats, verdicts);
   body += voxelLevel(findScan(scans, "kinect_capture0001"), findScan(scans, "kinect_capture0002"), 0.01,
                      repeats, verdicts);
