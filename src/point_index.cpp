@@ -119,20 +119,21 @@ class PointIndex::Policy {
   void visitRegion(const std::uint32_t[3], unsigned, std::uint64_t) {}
 
   /**
-   * A cell's points, or the outliers' (the run after the last cell). A crowded run is sorted by x (see
-   * build), so the scan starts at the query's x and sweeps outwards, each way until x alone is beyond the
-   * bound: a float sum of non-negative terms is never below one of them, so nothing nearer is skipped.
+   * A cell's points, or the outliers' (the run after the last cell). A crowded run is split into boxes (see
+   * build), visited nearer first and skipped when beyond the bound.
    */
   void visitCell(const std::uint32_t[3], std::uint64_t rank) {
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
     if (metric_ == Metric::Euclidean)
-      scanCell<Metric::Euclidean>(begin, end);
+      scanRun<Metric::Euclidean>(rank, begin, end);
     else
-      scanCell<Metric::Manhattan>(begin, end);
+      scanRun<Metric::Manhattan>(rank, begin, end);
   }
 
-  /** Cells with more points than this keep them sorted by x. */
+  /** Runs with more points than this are split into boxes. */
   static constexpr std::uint32_t kCrowded = 64;
+  /** The most points a box of a crowded run holds unsplit. */
+  static constexpr std::uint32_t kCrowdLeaf = 16;
   /** k for every point within the bound. */
   static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
   /**
@@ -148,23 +149,55 @@ class PointIndex::Policy {
 
  private:
   template <Metric M>
-  void scanCell(std::uint32_t begin, std::uint32_t end) {
+  void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
     const float* xyz = index_.xyz_.data();
     if (end - begin <= kCrowded) {
       for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
       return;
     }
-    std::uint32_t lo = begin, hi = end;
-    while (lo < hi) {
-      const std::uint32_t mid = lo + (hi - lo) / 2;
-      if (xyz[3 * std::size_t(mid)] < q_[0])
-        lo = mid + 1;
-      else
-        hi = mid;
+    const auto& roots = index_.crowd_root_;
+    const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
+    scanBoxes<M>(root->second);
+  }
+
+  /** A crowded run's boxes, depth first, the nearer half first; a box is skipped once beyond the bound. */
+  template <Metric M>
+  void scanBoxes(std::uint32_t node) {
+    const float* xyz = index_.xyz_.data();
+    const CrowdNode* nodes = index_.crowd_.data();
+    std::uint32_t pending[64];  // one per level at most: the farther halves, with their distances
+    float pending_distance[64];
+    int top = 0;
+    for (;;) {
+      const CrowdNode& box = nodes[node];
+      if (box.right == 0) {
+        for (std::uint32_t i = box.begin; i < box.end; ++i) consider<M>(xyz, i);
+      } else {
+        std::uint32_t nearer = node + 1, farther = box.right;
+        float near_d = boxDistance<M>(nodes[nearer]), far_d = boxDistance<M>(nodes[farther]);
+        if (far_d < near_d) std::swap(nearer, farther), std::swap(near_d, far_d);
+        if (double(far_d) <= bound_) pending[top] = farther, pending_distance[top++] = far_d;
+        if (double(near_d) <= bound_) {
+          node = nearer;
+          continue;
+        }
+      }
+      while (top > 0 && double(pending_distance[top - 1]) > bound_) --top;
+      if (top == 0) return;
+      node = pending[--top];
     }
-    for (std::uint32_t i = lo; i < end && !beyond<M>(xyz[3 * std::size_t(i)]); ++i) consider<M>(xyz, i);
-    for (std::uint32_t i = lo; i > begin && !beyond<M>(xyz[3 * std::size_t(i - 1)]); --i)
-      consider<M>(xyz, i - 1);
+  }
+
+  /**
+   * The least distance PCL could report for a point in the box: the gaps, squared and summed in the order of
+   * pointDistance, whose float steps are each monotone, so no point in the box comes out below it.
+   */
+  template <Metric M>
+  float boxDistance(const CrowdNode& box) const {
+    float gap[3];
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({box.lo[a] - q_[a], q_[a] - box.hi[a], 0.0f});
+    return M == Metric::Euclidean ? gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]
+                                  : gap[0] + gap[1] + gap[2];
   }
 
   /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
@@ -172,13 +205,6 @@ class PointIndex::Policy {
   void consider(const float* xyz, std::uint32_t i) {
     const float d = pointDistance(M, &xyz[3 * std::size_t(i)], q_);
     if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
-  }
-
-  /** The x difference alone already exceeds the bound. */
-  template <Metric M>
-  bool beyond(float x) const {
-    const float dx = std::fabs(x - q_[0]);
-    return double(M == Metric::Euclidean ? dx * dx : dx) > bound_;
   }
 
   /**
@@ -356,27 +382,53 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     std::copy(p, p + 3, &xyz_[3 * std::size_t(at)]);
     index_[at] = ids[j];
   }
-  // Crowded runs keep their points sorted by x, for the sweep in Policy::visitCell.
-  std::vector<std::uint32_t> order;
-  std::vector<float> cell_xyz;
-  std::vector<std::int32_t> cell_index;
+  // Crowded runs are split into boxes at the median of their longest side, for Policy::scanBoxes.
+  crowd_.clear();
+  crowd_root_.clear();
+  struct Slot {
+    float p[3];
+    std::int32_t index;
+  };
+  std::vector<Slot> run;
+  std::uint32_t first = 0;  // the run's first slot in the table
+  auto split = [&](auto& self, std::uint32_t begin, std::uint32_t end) -> void {
+    const std::size_t node = crowd_.size();
+    CrowdNode box{{run[begin].p[0], run[begin].p[1], run[begin].p[2]},
+                  {run[begin].p[0], run[begin].p[1], run[begin].p[2]},
+                  first + begin,
+                  first + end,
+                  0};
+    for (std::uint32_t i = begin + 1; i < end; ++i)
+      for (int a = 0; a < 3; ++a)
+        box.lo[a] = std::min(box.lo[a], run[i].p[a]), box.hi[a] = std::max(box.hi[a], run[i].p[a]);
+    crowd_.push_back(box);
+    if (end - begin <= Policy::kCrowdLeaf) return;
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (box.hi[a] - box.lo[a] > box.hi[axis] - box.lo[axis]) axis = a;
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    std::nth_element(run.begin() + begin, run.begin() + mid, run.begin() + end,
+                     [axis](const Slot& u, const Slot& v) {
+                       return u.p[axis] < v.p[axis] || (u.p[axis] == v.p[axis] && u.index < v.index);
+                     });
+    self(self, begin, mid);
+    crowd_[node].right = std::uint32_t(crowd_.size());
+    self(self, mid, end);
+  };
   for (std::size_t c = 0; c <= cells; ++c) {
     const std::uint32_t begin = start_[c], end = start_[c + 1];
     if (end - begin <= Policy::kCrowded) continue;
-    order.resize(end - begin);
-    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = begin + i;
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return xyz_[3 * std::size_t(a)] < xyz_[3 * std::size_t(b)] ||
-             (xyz_[3 * std::size_t(a)] == xyz_[3 * std::size_t(b)] && index_[a] < index_[b]);
-    });
-    cell_xyz.clear();
-    cell_index.clear();
-    for (std::uint32_t i : order) {
-      cell_xyz.insert(cell_xyz.end(), &xyz_[3 * std::size_t(i)], &xyz_[3 * std::size_t(i)] + 3);
-      cell_index.push_back(index_[i]);
+    run.resize(end - begin);
+    for (std::uint32_t i = begin; i < end; ++i)
+      run[i - begin] = {
+          {xyz_[3 * std::size_t(i)], xyz_[3 * std::size_t(i) + 1], xyz_[3 * std::size_t(i) + 2]}, index_[i]};
+    first = begin;
+    crowd_root_.emplace_back(std::uint32_t(c), std::uint32_t(crowd_.size()));
+    split(split, 0, end - begin);
+    for (std::uint32_t i = begin; i < end; ++i) {
+      std::copy(run[i - begin].p, run[i - begin].p + 3, &xyz_[3 * std::size_t(i)]);
+      index_[i] = run[i - begin].index;
     }
-    std::copy(cell_xyz.begin(), cell_xyz.end(), &xyz_[3 * std::size_t(begin)]);
-    std::copy(cell_index.begin(), cell_index.end(), &index_[begin]);
   }
 }
 
@@ -455,7 +507,8 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
 std::size_t PointIndex::getMemoryBytes() const {
   return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
-         index_.capacity() * sizeof(std::int32_t);
+         index_.capacity() * sizeof(std::int32_t) + crowd_.capacity() * sizeof(CrowdNode) +
+         crowd_root_.capacity() * sizeof(crowd_root_[0]);
 }
 
 }  // namespace fot

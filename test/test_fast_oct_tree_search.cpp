@@ -132,47 +132,49 @@ TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
 
 TEST(FastOctTreeSearch, EveryKKeepsTheNearestInOrderWithTiesToTheSmallerIndex) {
   // A lattice in a shuffled order: many points tie. Small k keep their results sorted as they go, large k
-  // in a heap; both must give the brute-force order, ties to the smaller index, for either metric.
+  // in a heap; both must give the brute-force order, ties to the smaller index, for either metric. Cells of
+  // 0.15 m hold a few points; cells of 0.8 m are crowded, their points split into boxes whose sides tie too.
   Cloud::Ptr cloud(new Cloud);
   for (int i = 0; i < 12; ++i)
     for (int j = 0; j < 12; ++j)
       for (int k = 0; k < 8; ++k) cloud->push_back(PointXYZ(0.1f * i, 0.1f * j, 0.1f * k));
   std::mt19937 rng(4);
   std::shuffle(cloud->begin(), cloud->end(), rng);
-  for (pcl::fot::Metric metric : {pcl::fot::Metric::Euclidean, pcl::fot::Metric::Manhattan}) {
-    Search ours(0.15);
-    ours.setMetric(metric);
-    ours.setInputCloud(cloud);
-    pcl::Indices b;
-    std::vector<float> db;
-    for (std::size_t i = 0; i < cloud->size(); i += 37) {
-      PointXYZ q = (*cloud)[i];
-      q.x += i % 2 ? 0.0f : 0.05f;  // on a lattice point, or halfway to the next
-      std::vector<std::pair<float, pcl::index_t>> all;
-      for (pcl::index_t j = 0; j < pcl::index_t(cloud->size()); ++j) {
-        const float dx = (*cloud)[j].x - q.x, dy = (*cloud)[j].y - q.y, dz = (*cloud)[j].z - q.z;
-        all.emplace_back(metric == pcl::fot::Metric::Euclidean
-                             ? dx * dx + dy * dy + dz * dz
-                             : std::fabs(dx) + std::fabs(dy) + std::fabs(dz),
-                         j);
-      }
-      std::sort(all.begin(), all.end());
-      for (int k : {10, 80, 81, 300, 1000}) {
-        ASSERT_EQ(ours.nearestKSearch(q, k, b, db), k);
-        for (int n = 0; n < k; ++n) {
-          ASSERT_EQ(db[n], all[n].first) << "k " << k << ", result " << n;
-          ASSERT_EQ(b[n], all[n].second) << "k " << k << ", result " << n;
+  for (double res : {0.15, 0.8})
+    for (pcl::fot::Metric metric : {pcl::fot::Metric::Euclidean, pcl::fot::Metric::Manhattan}) {
+      Search ours(res);
+      ours.setMetric(metric);
+      ours.setInputCloud(cloud);
+      pcl::Indices b;
+      std::vector<float> db;
+      for (std::size_t i = 0; i < cloud->size(); i += 37) {
+        PointXYZ q = (*cloud)[i];
+        q.x += i % 2 ? 0.0f : 0.05f;  // on a lattice point, or halfway to the next
+        std::vector<std::pair<float, pcl::index_t>> all;
+        for (pcl::index_t j = 0; j < pcl::index_t(cloud->size()); ++j) {
+          const float dx = (*cloud)[j].x - q.x, dy = (*cloud)[j].y - q.y, dz = (*cloud)[j].z - q.z;
+          all.emplace_back(metric == pcl::fot::Metric::Euclidean
+                               ? dx * dx + dy * dy + dz * dz
+                               : std::fabs(dx) + std::fabs(dy) + std::fabs(dz),
+                           j);
         }
-        // A radius search with max_nn keeps the same order.
-        const double r = 0.45, bound = metric == pcl::fot::Metric::Euclidean ? r * r : r;
-        const std::size_t within = std::size_t(
-            std::count_if(all.begin(), all.end(), [&](const auto& a) { return double(a.first) <= bound; }));
-        const std::size_t n = ours.radiusSearch(q, r, b, db, unsigned(k));
-        ASSERT_EQ(n, std::min(within, std::size_t(k))) << "radius, max_nn " << k;
-        for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(b[m], all[m].second) << "radius, max_nn " << k;
+        std::sort(all.begin(), all.end());
+        for (int k : {10, 80, 81, 300, 1000}) {
+          ASSERT_EQ(ours.nearestKSearch(q, k, b, db), k);
+          for (int n = 0; n < k; ++n) {
+            ASSERT_EQ(db[n], all[n].first) << "k " << k << ", result " << n;
+            ASSERT_EQ(b[n], all[n].second) << "k " << k << ", result " << n;
+          }
+          // A radius search with max_nn keeps the same order.
+          const double r = 0.45, bound = metric == pcl::fot::Metric::Euclidean ? r * r : r;
+          const std::size_t within = std::size_t(
+              std::count_if(all.begin(), all.end(), [&](const auto& a) { return double(a.first) <= bound; }));
+          const std::size_t n = ours.radiusSearch(q, r, b, db, unsigned(k));
+          ASSERT_EQ(n, std::min(within, std::size_t(k))) << "radius, max_nn " << k;
+          for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(b[m], all[m].second) << "radius, max_nn " << k;
+        }
       }
     }
-  }
 }
 
 TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
@@ -331,7 +333,7 @@ void expectBruteForceAnswers(const Search& ours, const Cloud::Ptr& cloud, std::s
     if (!pcl::isFinite((*cloud)[i])) continue;
     PointXYZ q = (*cloud)[i];
     q.x += 0.013f, q.y -= 0.021f;
-    for (int k : {1, 10}) {
+    for (int k : {1, 10, 50}) {
       ASSERT_EQ(brute.nearestKSearch(q, k, a, da), ours.nearestKSearch(q, k, b, db)) << name;
       ASSERT_EQ(flannDistances(*cloud, q, a), db) << name << ": k-NN, k = " << k;
     }

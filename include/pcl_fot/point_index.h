@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <pcl_fot/fast_oct_tree.h>
@@ -14,7 +15,7 @@ namespace fot {
  * Exact nearest-neighbour queries on a point set: a FastOctTree of the points' cells, plus a compact table
  * from each occupied cell to its points. The tree walk (see NeighbourWalk) visits cells nearest first and
  * prunes by cell boxes; the table lists each cell's points contiguously, found by the cell's rank in the
- * tree's Morton order.
+ * tree's Morton order. A crowded cell's points are split further into boxes of the points themselves.
  *
  * Distances are those PCL's searches report: squared Euclidean, (dx² + dy²) + dz² in float, or Manhattan,
  * (|dx| + |dy|) + |dz|. Results are exact, nearest first, and ties go to the smaller point index.
@@ -77,10 +78,20 @@ class PointIndex {
   std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to
   std::vector<std::uint64_t> ranks_;  // per pool word: rank of the first occupied cell under a bitmap word
   // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
-  // finite points beyond the key range, which every search scans (as a crowded cell, sorted by x).
+  // finite points beyond the key range, which every search scans (as a crowded cell).
   std::vector<std::uint32_t> start_;
   std::vector<float> xyz_;           // the points, grouped by cell
   std::vector<std::int32_t> index_;  // their indices as given to build
+  /** A box of a crowded run's points: a leaf, or split in two at the median of its longest side. */
+  struct CrowdNode {
+    float lo[3], hi[3];
+    std::uint32_t begin, end;  // the points, in xyz_ / index_
+    std::uint32_t right;       // the second half's node, 0 for a leaf; the first half's follows this one
+  };
+  // Crowded runs, too many points to scan whole, are split into boxes, in pre-order: crowd_root_ holds
+  // each one's cell rank and first node, by rank.
+  std::vector<CrowdNode> crowd_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> crowd_root_;
 };
 
 }  // namespace fot
