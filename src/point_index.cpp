@@ -176,17 +176,30 @@ class PointIndex::Policy {
         std::uint32_t nearer = node + 1, farther = box.right;
         float near_d = boxDistance<M>(nodes[nearer]), far_d = boxDistance<M>(nodes[farther]);
         if (far_d < near_d) std::swap(nearer, farther), std::swap(near_d, far_d);
-        if (double(far_d) <= bound_) pending[top] = farther, pending_distance[top++] = far_d;
-        if (double(near_d) <= bound_) {
+        if (mayHold(far_d, nodes[farther])) pending[top] = farther, pending_distance[top++] = far_d;
+        if (mayHold(near_d, nodes[nearer])) {
           node = nearer;
           continue;
         }
       }
-      while (top > 0 && double(pending_distance[top - 1]) > bound_) --top;
+      while (top > 0 && !mayHold(pending_distance[top - 1], nodes[pending[top - 1]])) --top;
       if (top == 0) return;
       node = pending[--top];
     }
   }
+
+  /**
+   * A box at `distance` may hold a point the results take. Once k are kept, one at the k-th's distance must
+   * have a smaller index, so a pile of equal points (sensors that write (0, 0, 0) for no return) is not
+   * scanned whole: its halves split by index.
+   */
+  bool mayHold(float distance, const CrowdNode& box) const {
+    if (double(distance) != bound_) return double(distance) < bound_;
+    return results_.size() < k_ || box.least_index < worst().index;
+  }
+
+  /** The k-th best kept, once there are k. */
+  const Hit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
 
   /**
    * The least distance PCL could report for a point in the box: the gaps, squared and summed in the order of
@@ -397,10 +410,13 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
                   {run[begin].p[0], run[begin].p[1], run[begin].p[2]},
                   first + begin,
                   first + end,
-                  0};
-    for (std::uint32_t i = begin + 1; i < end; ++i)
+                  0,
+                  run[begin].index};
+    for (std::uint32_t i = begin + 1; i < end; ++i) {
       for (int a = 0; a < 3; ++a)
         box.lo[a] = std::min(box.lo[a], run[i].p[a]), box.hi[a] = std::max(box.hi[a], run[i].p[a]);
+      box.least_index = std::min(box.least_index, run[i].index);
+    }
     crowd_.push_back(box);
     if (end - begin <= Policy::kCrowdLeaf) return;
     int axis = 0;

@@ -177,6 +177,46 @@ TEST(FastOctTreeSearch, EveryKKeepsTheNearestInOrderWithTiesToTheSmallerIndex) {
     }
 }
 
+TEST(FastOctTreeSearch, APileOfEqualPointsGivesItsSmallestIndicesFirst) {
+  // Sensors that write (0, 0, 0) for no return pile thousands of equal points in one cell. Its boxes split
+  // them by index, and a search stops at the k smallest rather than scanning them all: check it keeps those.
+  Cloud::Ptr cloud(new Cloud);
+  std::vector<pcl::index_t> pile;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  for (int i = 0; i < 12000; ++i) {
+    if (i % 3 == 1) pile.push_back(pcl::index_t(cloud->size()));
+    cloud->push_back(i % 3 == 1 ? PointXYZ(0, 0, 0) : PointXYZ(u(rng), u(rng), u(rng)));
+  }
+  for (pcl::fot::Metric metric : {pcl::fot::Metric::Euclidean, pcl::fot::Metric::Manhattan})
+    for (Search ours : {Search(), Search(0.5)}) {
+      ours.setMetric(metric);
+      ours.setInputCloud(cloud);
+      pcl::Indices b;
+      std::vector<float> db;
+      for (int k : {1, 10, 80, 81, 500}) {
+        ASSERT_EQ(ours.nearestKSearch(PointXYZ(0, 0, 0), k, b, db), k);
+        EXPECT_EQ(b, pcl::Indices(pile.begin(), pile.begin() + k)) << "k " << k;
+        EXPECT_EQ(db, std::vector<float>(std::size_t(k), 0.0f));
+        ASSERT_EQ(ours.radiusSearch(PointXYZ(0, 0, 0), 1e-3, b, db, unsigned(k)), k);
+        EXPECT_EQ(b, pcl::Indices(pile.begin(), pile.begin() + k)) << "radius, max_nn " << k;
+      }
+      ASSERT_EQ(ours.radiusSearch(PointXYZ(0, 0, 0), 1e-3, b, db), pile.size());
+      EXPECT_EQ(b, pile) << "the whole pile, in index order";
+      // From 1 m away, radius 1 m: the pile's box lies on the bound before any result is kept.
+      const PointXYZ q(1, 0, 0);
+      std::size_t within = 0;
+      for (const PointXYZ& p : *cloud) {
+        const float dx = p.x - q.x, dy = p.y - q.y, dz = p.z - q.z;
+        within +=
+            (metric == pcl::fot::Metric::Euclidean ? dx * dx + dy * dy + dz * dz
+                                                   : std::fabs(dx) + std::fabs(dy) + std::fabs(dz)) <= 1.0f;
+      }
+      EXPECT_EQ(ours.radiusSearch(q, 1.0, b, db), within);
+      EXPECT_EQ(ours.radiusSearch(q, 1.0, b, db, 4500), std::min<std::size_t>(within, 4500));
+    }
+}
+
 TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
   const Cloud::Ptr cloud = pcl_fot_test::loadScan("kinect_capture0002.pcd");  // organised: NaN points
   auto subset = std::make_shared<pcl::Indices>();

@@ -87,6 +87,7 @@ class PointIndex {
     float lo[3], hi[3];
     std::uint32_t begin, end;  // the points, in xyz_ / index_
     std::uint32_t right;       // the second half's node, 0 for a leaf; the first half's follows this one
+    std::int32_t least_index;  // the smallest index of its points, for ties
   };
   // Crowded runs, too many points to scan whole, are split into boxes, in pre-order: crowd_root_ holds
   // each one's cell rank and first node, by rank.
