@@ -17,14 +17,19 @@ class NearestCellSearch::Measure {
 
   void childGaps(const std::uint32_t lo[3], unsigned child_level, Distance gap[3][2]) const {
     const std::int64_t half = std::int64_t(1) << child_level;
-    for (int a = 0; a < 3; ++a)
-      for (int h = 0; h < 2; ++h) {
-        const std::int64_t first = std::int64_t(lo[a]) + h * half, last = first + half - 1;
-        // Capped: no two valid keys are farther apart, and a smaller lower bound stays a lower bound.
-        const std::int64_t d =
-            std::min<std::int64_t>(std::max<std::int64_t>({first - q_[a], q_[a] - last, 0}), kMaxGap);
-        gap[a][h] = metric_ == Metric::Manhattan ? d : d * d;
+    for (int a = 0; a < 3; ++a) {
+      // The query's offset from the corner; at most one of each half's two terms is positive.
+      const std::int64_t r = std::int64_t(q_[a]) - lo[a];
+      const std::int64_t lower = std::max<std::int64_t>(-r, 0) + std::max<std::int64_t>(r - half + 1, 0),
+                         upper = std::max<std::int64_t>(half - r, 0) +
+                                 std::max<std::int64_t>(r - 2 * half + 1, 0);
+      if (metric_ == Metric::Manhattan) {
+        gap[a][0] = lower, gap[a][1] = upper;
+      } else {  // capped: no two valid keys are farther apart, and a smaller lower bound stays a lower bound
+        const std::int64_t l = std::min(lower, kMaxGap), u = std::min(upper, kMaxGap);
+        gap[a][0] = l * l, gap[a][1] = u * u;
       }
+    }
   }
 
   Distance exterior(const std::uint32_t lo[3], unsigned level) const {
