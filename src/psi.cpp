@@ -1,7 +1,9 @@
 #include <pcl_fot/psi.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -209,19 +211,60 @@ class DirectedSum {
   std::int64_t floor_ = 0;  // this brick's cells left lie further than its windows reached
 };
 
-/** d(a, b, v) of eq. 2, split over threads by bricks; integer sums, so any split gives the same. */
-std::uint64_t directed(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap,
-                       unsigned threads) {
-  std::vector<Piece> pieces;
-  collectPieces(a.words(), a.rootWord(), a.rootLevel(), a.rootBase()[0], a.rootBase()[1], a.rootBase()[2], v,
-                pieces);
-  const std::size_t workers = detail::workerCount(threads, pieces.size());
-  std::vector<std::size_t> bounds(workers + 1, pieces.size());
-  for (std::size_t w = 0; w < workers; ++w) bounds[w] = pieces.size() * w / workers;
+/** Pieces per chunk: the unit in which threads claim work. */
+constexpr std::size_t kPiecesPerChunk = 8;
+/**
+ * Pieces each thread must have before it is started. A piece costs about 1 µs (a lone cell) to 20 µs (a
+ * dense brick), and a thread about 0.25 ms to start: fewer pieces finish sooner on one thread.
+ */
+constexpr std::size_t kMinPiecesPerThread = 128;
+
+/**
+ * d(a, b, v) + d(b, a, v) of eq. 2. Both directions' pieces are cut into chunks that the threads claim one
+ * at a time, so a thread whose pieces were cheap takes more. Integer sums, so any split gives the same
+ * result.
+ */
+std::uint64_t bothDirections(const FastOctTree& a, const FastOctTree& b, CellState v, std::int64_t cap,
+                             unsigned threads) {
+  struct Direction {
+    const FastOctTree& from;
+    const FastOctTree& to;
+    std::vector<Piece> pieces;
+  };
+  Direction directions[2] = {{a, b, {}}, {b, a, {}}};
+  struct Chunk {
+    std::size_t direction, first, last;
+  };
+  std::vector<Chunk> chunks;
+  for (std::size_t d = 0; d < 2; ++d) {
+    const FastOctTree& from = directions[d].from;
+    std::vector<Piece>& pieces = directions[d].pieces;
+    collectPieces(from.words(), from.rootWord(), from.rootLevel(), from.rootBase()[0], from.rootBase()[1],
+                  from.rootBase()[2], v, pieces);
+    for (std::size_t first = 0; first < pieces.size(); first += kPiecesPerChunk)
+      chunks.push_back(Chunk{d, first, std::min(first + kPiecesPerChunk, pieces.size())});
+  }
+  const std::size_t workers = detail::workerCount(
+      threads, (directions[0].pieces.size() + directions[1].pieces.size()) / kMinPiecesPerThread);
+  std::atomic<std::size_t> next{0};
   std::vector<std::uint64_t> sums(workers, 0);
   detail::runWorkers(workers, [&](std::size_t w) {
-    DirectedSum sum(a, b, v, cap);
-    sums[w] = sum.pieces(pieces.data() + bounds[w], pieces.data() + bounds[w + 1]);
+    // Chunks are claimed in order, so a thread that reaches the second direction is done with the first.
+    // One DirectedSum at a time: with both alive, freeing their buffers left enough at the heap's top for
+    // malloc to return it to the system, and every later call paid a page fault per 4 KB (0.13 -> 0.8 ms
+    // on maps of 5,700 cells).
+    std::unique_ptr<DirectedSum> sum;
+    std::size_t direction = 2;
+    for (std::size_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < chunks.size();) {
+      const Chunk& chunk = chunks[c];
+      const Direction& d = directions[chunk.direction];
+      if (chunk.direction != direction) {
+        sum.reset();
+        sum = std::make_unique<DirectedSum>(d.from, d.to, v, cap);
+        direction = chunk.direction;
+      }
+      sums[w] += sum->pieces(d.pieces.data() + chunk.first, d.pieces.data() + chunk.last);
+    }
   });
   std::uint64_t sum = 0;
   for (std::uint64_t s : sums) sum += s;
@@ -239,10 +282,7 @@ PsiResult psi(const FastOctTree& a, const FastOctTree& b, const PsiOptions& opti
   return detail::sumOverValues(
       options, a.getResolution(),
       [&](CellState v) { return std::make_pair(cellCount(a, v), cellCount(b, v)); },
-      [&](CellState v) {
-        return directed(a, b, v, options.cap, options.threads) +
-               directed(b, a, v, options.cap, options.threads);
-      });
+      [&](CellState v) { return bothDirections(a, b, v, options.cap, options.threads); });
 }
 
 }  // namespace fot

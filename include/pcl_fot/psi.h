@@ -15,7 +15,8 @@ struct PsiOptions {
   /** Each cell's distance counts at most this many cells: a robust score for registration. */
   std::int64_t cap = std::numeric_limits<std::int64_t>::max();
   /**
-   * Worker threads; 0 takes every hardware thread, and at most four per hardware thread are used. The
+   * Worker threads; 0 takes every hardware thread, and at most four per hardware thread are used. A thread
+   * is only started for every 128 pieces of work (16³ bricks, or lone cells), so small maps run on one. The
    * result does not depend on it.
    */
   unsigned threads = 1;
