@@ -16,11 +16,13 @@ inline std::uint16_t step(std::uint16_t d) {
 
 }  // namespace
 
-DistanceMap::DistanceMap(const FastOccMesh& grid, CellState value)
-    : side_(grid.getSide()), min_key_(grid.getMinKey()) {
-  if (side_ > (kNone - 1) / 3)
-    throw std::invalid_argument("pcl::fot::DistanceMap: a cube of side " + std::to_string(side_) +
+void DistanceMap::compute(const FastOccMesh& grid, CellState value) {
+  if (grid.getSide() > (kNone - 1) / 3)
+    throw std::invalid_argument("pcl::fot::DistanceMap: a cube of side " + std::to_string(grid.getSide()) +
                                 " cells has distances beyond 16 bits");
+  side_ = grid.getSide();
+  min_key_ = grid.getMinKey();
+  empty_ = true;
   distances_.assign(side_ * side_ * side_, kNone);
   grid.forEachCell(value, [&](const Key& k) {
     distances_[index(k)] = 0;
@@ -56,6 +58,12 @@ DistanceMap::DistanceMap(const FastOccMesh& grid, CellState value)
 }
 
 PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, const PsiOptions& options) {
+  DistanceMap workspace;
+  return psiByDistanceMaps(a, b, workspace, options);
+}
+
+PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, DistanceMap& workspace,
+                            const PsiOptions& options) {
   if (a.getGrid() != b.getGrid() || a.getSide() != b.getSide() || a.getMinKey() != b.getMinKey())
     throw std::invalid_argument(
         "pcl::fot::psiByDistanceMaps: the grids must share resolution, origin and cube");
@@ -64,12 +72,12 @@ PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, const Ps
   auto count = [](const FastOccMesh& g, CellState v) {
     return v == CellState::Occupied ? g.getOccupiedCount() : g.getFreeCount();
   };
-  // One distance map at a time: 2 GiB each at 1024³.
+  // One distance map at a time, in the same storage: 2 GiB at 1024³.
   auto read_off = [&](const FastOccMesh& from, const FastOccMesh& to, CellState v) {
-    const DistanceMap map(to, v);
+    workspace.compute(to, v);
     std::uint64_t sum = 0;
     from.forEachCell(
-        v, [&](const Key& k) { sum += std::uint64_t(std::min<std::int64_t>(map.at(k), options.cap)); });
+        v, [&](const Key& k) { sum += std::uint64_t(std::min<std::int64_t>(workspace.at(k), options.cap)); });
     return sum;
   };
   return detail::sumOverValues(

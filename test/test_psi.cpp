@@ -74,6 +74,7 @@ struct TwinMaps {
 
 TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
   std::mt19937 rng(61);
+  DistanceMap workspace;  // reused across trials: the distances of earlier maps must not leak into later ones
   for (int trial = 0; trial < 8; ++trial) {
     SCOPED_TRACE(trial);
     // Tiny maps (a root below a brick), dense clusters (cells within the bit-dilation reach) and sparse
@@ -113,7 +114,10 @@ TEST(Psi, TreesDistanceMapsAndBruteForceAgreeOnRandomMaps) {
         o.include_free = include_free;
         o.cap = caps[i];
         expectSame(psi(a.tree, b.tree, o), brute[i], "tree");
-        if (i % 2 == 0) expectSame(psiByDistanceMaps(a.grid, b.grid, o), brute[i], "distance maps");
+        if (i % 2 == 0)
+          expectSame(psiByDistanceMaps(a.grid, b.grid, o), brute[i], "distance maps");
+        else
+          expectSame(psiByDistanceMaps(a.grid, b.grid, workspace, o), brute[i], "distance maps, reused");
         o.threads = 4;
         expectSame(psi(a.tree, b.tree, o), brute[i], "tree, four threads");
       }
@@ -157,6 +161,7 @@ TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
     double res;
     std::uint32_t side;
   };
+  DistanceMap workspace;  // reused by the second case's larger cube
   for (const Case& c : {Case{"kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02, 256},
                         Case{"room_scan1.pcd", "room_scan2.pcd", 0.1, 512}}) {
     SCOPED_TRACE(c.a);
@@ -181,6 +186,7 @@ TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
     capped.cap = 5;
     capped.threads = 0;
     expectSame(psi(ta, tb, capped), psiByDistanceMaps(ga, gb, capped), "capped, all threads");
+    expectSame(tree, psiByDistanceMaps(ga, gb, workspace), "distance maps in a reused workspace");
   }
 }
 

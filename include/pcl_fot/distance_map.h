@@ -22,8 +22,17 @@ class DistanceMap {
   /** Where the cube holds no cell of the value. */
   static constexpr std::uint16_t kNone = 0xFFFF;
 
+  /** An empty map, to be filled by compute(). */
+  DistanceMap() = default;
   /** Throws std::invalid_argument for a cube whose distances would not fit 16 bits (side over 21845). */
-  DistanceMap(const FastOccMesh& grid, CellState value);
+  DistanceMap(const FastOccMesh& grid, CellState value) { compute(grid, value); }
+
+  /**
+   * Makes this the map of `grid` and `value`, reusing its storage for a cube of the same side: memory not
+   * yet touched costs a page fault per 4 KB, which on a virtual machine can take longer than the transform
+   * (doc/benchmarks.md gives both). Throws as the constructor does, leaving the map as it was.
+   */
+  void compute(const FastOccMesh& grid, CellState value);
 
   /** The distance of a cell of the cube; kNone if the cube holds no cell of the value. */
   std::uint16_t at(const Key& key) const { return distances_[index(key)]; }
@@ -35,7 +44,7 @@ class DistanceMap {
            side_ * (std::size_t(k.y - min_key_.y) + side_ * std::size_t(k.z - min_key_.z));
   }
 
-  std::size_t side_;
+  std::size_t side_ = 0;
   Key min_key_;
   bool empty_ = true;
   std::vector<std::uint16_t> distances_;
@@ -47,6 +56,10 @@ class DistanceMap {
  * same resolution, origin and cube.
  */
 PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, const PsiOptions& options = {});
+/** psiByDistanceMaps computing its maps, one after another, in `workspace`, which keeps the storage for the
+ * next call. */
+PsiResult psiByDistanceMaps(const FastOccMesh& a, const FastOccMesh& b, DistanceMap& workspace,
+                            const PsiOptions& options = {});
 
 }  // namespace fot
 }  // namespace pcl
