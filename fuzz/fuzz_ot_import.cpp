@@ -3,11 +3,10 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/io/octomap_ot.h>
+#include <pcl_fot/io/octomap.h>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  pcl::fot::io::BtImportOptions options;
+  pcl::fot::io::OctoMapImportOptions options;
   options.max_pool_bytes = std::size_t(4) << 20;
   try {
     const pcl::fot::FastOctTree tree =

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <vector>
 
-#include <pcl_fot/point_index.h>
+#include <pcl_fot/search/point_index.h>
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include <pcl_fot/psi.h>
+#include <pcl_fot/psi/psi.h>
 
 namespace {
 

@@ -10,8 +10,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include <pcl_fot/ray_caster.h>
-#include <pcl_fot/scan_insertion.h>
+#include <pcl_fot/mapping/ray_traversal.h>
+#include <pcl_fot/mapping/scan_insertion.h>
 
 namespace {
 
@@ -25,7 +25,7 @@ using pcl::fot::Key;
  */
 void checkAgainstSegments(const pcl::fot::FastOctTree& tree, const float sensor[3],
                           const std::vector<float>& xyz, const pcl::fot::ScanStats& stats) {
-  const pcl::fot::VoxelGrid& grid = tree.getGrid();
+  const pcl::fot::CellGrid& grid = tree.getGrid();
   std::unordered_map<Key, CellState, pcl::fot::KeyHash> cells;
   std::vector<Key> ends;
   std::size_t rays = 0;

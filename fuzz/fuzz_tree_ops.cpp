@@ -14,11 +14,11 @@
 #include <unordered_map>
 #include <vector>
 
-#include <pcl_fot/accessor.h>
-#include <pcl_fot/fast_oct_tree.h>
 #include <pcl_fot/io/fot_file.h>
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/nearest_neighbor.h>
+#include <pcl_fot/io/octomap.h>
+#include <pcl_fot/search/nearest_cell_search.h>
+#include <pcl_fot/tree/accessor.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace {
 
@@ -148,7 +148,7 @@ void checkTree(const FastOctTree& t, const Model& model, const std::vector<Key>&
     const auto it = model.find(beside);
     check(t.getCell(beside) == (it == model.end() ? CellState::Unknown : it->second));
   }
-  check(canonicalBlocks(t, t.rootWord(), t.rootLevel()) == t.getBlockCount());
+  check(canonicalBlocks(t, t.root().word, t.getDepth()) == t.getBlockCount());
   check(t.getNodeCount() == 1 + 8 * t.getBlockCount());
   check(t.poolWords() * sizeof(NodeWord) <= t.getMaxMemoryBytes());
 

@@ -12,8 +12,8 @@
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeKey.h>
 
-#include <pcl_fot/fast_oct_tree.h>
-#include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/octomap.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 /**
  * Expects `ours` to hold exactly OctoMap's free and occupied cells: every OctoMap leaf is a box of one

@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 using namespace pcl::fot;
 
@@ -28,7 +28,7 @@ FastOctTree rebuilt(const FastOctTree& t) {
 /** Expects fromCanonicalPool to refuse `pool` with a message containing `why`. */
 void expectRefused(const FastOctTree::CanonicalPool& pool, const std::string& why) {
   try {
-    FastOctTree::fromCanonicalPool(VoxelGrid(0.1), pool);
+    FastOctTree::fromCanonicalPool(CellGrid(0.1), pool);
     ADD_FAILURE() << "accepted a pool that should fail with: " << why;
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
@@ -135,8 +135,7 @@ TEST(CanonicalPool, EveryFlawIsNamed) {
     words[8] = node::isBitmap(good.words[0]) ? good.words[0] : node::reference(2);
     pool.words = words;
     pool.root_level = good.root_level + 1;
-    const std::uint32_t mask = ~((std::uint32_t(1) << pool.root_level) - 1);
-    for (auto& b : pool.root_base) b &= mask;
+    pool.root_base = pool.root_base.corner(pool.root_level);
     if (pool.root_base == good.root_base) expectRefused(pool, "smallest cube");
   }
   // Known cells beyond the key range: a full root at the top of the coordinate space.
@@ -147,5 +146,5 @@ TEST(CanonicalPool, EveryFlawIsNamed) {
   far.root_base = {0, 0, 0};
   expectRefused(far, "key range");
   // The pool cap.
-  EXPECT_THROW(FastOctTree::fromCanonicalPool(VoxelGrid(0.1), good, 64), MemoryLimitError);
+  EXPECT_THROW(FastOctTree::fromCanonicalPool(CellGrid(0.1), good, 64), MemoryLimitError);
 }

@@ -9,13 +9,13 @@
 
 #include <pcl/common/point_tests.h>
 
-#include <pcl_fot/accessor.h>
-#include <pcl_fot/cast_ray.h>
-#include <pcl_fot/nearest_neighbor.h>
-#include <pcl_fot/occupancy_mapping.h>
-#include <pcl_fot/psi.h>
-#include <pcl_fot/search/fast_oct_tree_search.h>
-#include <pcl_fot/worker_threads.h>
+#include <pcl_fot/detail/worker_threads.h>
+#include <pcl_fot/mapping/cast_ray.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/psi/psi.h>
+#include <pcl_fot/search/nearest_cell_search.h>
+#include <pcl_fot/tree/accessor.h>
 
 #include "scan_data.h"
 

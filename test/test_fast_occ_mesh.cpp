@@ -4,13 +4,13 @@
 #include <random>
 #include <vector>
 
-#include <pcl_fot/fast_occ_mesh.h>
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/dense/fast_occ_mesh.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 using namespace pcl::fot;
 
 TEST(FastOccMesh, DefaultIsThePapers128MiBGrid) {
-  FastOccMesh grid(VoxelGrid(0.01));
+  FastOccMesh grid(CellGrid(0.01));
   EXPECT_EQ(grid.getSide(), 1024u);
   EXPECT_EQ(grid.getMinKey(), (Key{-512, -512, -512}));
   EXPECT_EQ(grid.getMemoryBytes(), sizeof(FastOccMesh) + (std::size_t(128) << 20));
@@ -24,13 +24,13 @@ TEST(FastOccMesh, DefaultIsThePapers128MiBGrid) {
 }
 
 TEST(FastOccMesh, RejectsBadGeometry) {
-  EXPECT_THROW(FastOccMesh(VoxelGrid(0.1), 0), std::invalid_argument);
-  EXPECT_THROW(FastOccMesh(VoxelGrid(0.1), 16, Key{kMaxKey - 4, 0, 0}), std::out_of_range);
-  EXPECT_THROW(FastOccMesh(VoxelGrid(-1.0), 16), std::invalid_argument);
+  EXPECT_THROW(FastOccMesh(CellGrid(0.1), 0), std::invalid_argument);
+  EXPECT_THROW(FastOccMesh(CellGrid(0.1), 16, Key{kMaxKey - 4, 0, 0}), std::out_of_range);
+  EXPECT_THROW(FastOccMesh(CellGrid(-1.0), 16), std::invalid_argument);
 }
 
 TEST(FastOccMesh, CellsOutsideTheCube) {
-  FastOccMesh grid(VoxelGrid(0.1), 8, Key{10, 20, 30});
+  FastOccMesh grid(CellGrid(0.1), 8, Key{10, 20, 30});
   EXPECT_TRUE(grid.contains({10, 20, 30}));
   EXPECT_TRUE(grid.contains({17, 27, 37}));
   EXPECT_FALSE(grid.contains({18, 20, 30}));
@@ -51,7 +51,7 @@ TEST(FastOccMesh, CellsOutsideTheCube) {
 }
 
 TEST(FastOccMesh, SameCellsAsTheTreeUnderRandomWrites) {
-  const VoxelGrid vg(0.05);
+  const CellGrid vg(0.05);
   FastOccMesh grid(vg, 64, Key{-20, -30, -40});
   FastOctTree tree(vg);
   std::mt19937 rng(5);
@@ -82,7 +82,7 @@ TEST(FastOccMesh, SameCellsAsTheTreeUnderRandomWrites) {
 }
 
 TEST(FastOccMesh, PointsUseTheSameGridAsTheTree) {
-  const VoxelGrid vg(0.1, 0.5, 0.5, 0.5);
+  const CellGrid vg(0.1, 0.5, 0.5, 0.5);
   FastOccMesh grid(vg, 32);
   FastOctTree tree(vg);
   std::mt19937 rng(9);

@@ -7,8 +7,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include <pcl_fot/accessor.h>
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/tree/accessor.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 using namespace pcl::fot;
 
@@ -59,7 +59,7 @@ void checkAgainstModel(const FastOctTree& t, const Model& m) {
   }
   ASSERT_EQ(seen, m.size());
   for (const auto& kv : m) ASSERT_EQ(t.getCell(kv.first), kv.second) << toString(kv.first);
-  EXPECT_EQ(checkCanonical(t, t.rootWord(), t.rootLevel()), t.getBlockCount());
+  EXPECT_EQ(checkCanonical(t, t.root().word, t.getDepth()), t.getBlockCount());
   EXPECT_EQ(t.getNodeCount(), 1 + 8 * t.getBlockCount());
 }
 
@@ -362,7 +362,7 @@ TEST(FastOctTree, MemoryAccountingIsExact) {
   for (int i = 0; i < 50000; ++i)
     tree.setCell({std::int32_t(rng() % 500), std::int32_t(rng() % 500), std::int32_t(rng() % 500)},
                  CellState::Occupied);
-  EXPECT_EQ(checkCanonical(tree, tree.rootWord(), tree.rootLevel()), tree.getBlockCount());
+  EXPECT_EQ(checkCanonical(tree, tree.root().word, tree.getDepth()), tree.getBlockCount());
   EXPECT_GE(tree.getMemoryBytes(), sizeof(FastOctTree) + (1 + tree.getBlockCount()) * 32);
   EXPECT_LE(tree.getMemoryBytes(), sizeof(FastOctTree) + 2 * (1 + tree.getBlockCount()) * 32 + 64);
   tree.clear();
@@ -462,7 +462,7 @@ TEST(FastOctTree, AWriteRefusedBeyondTheRootLeavesThePoolAsItWas) {
           tree.setBox(Key{cube, cube, cube}, Key{cube + 15, cube + 15, cube + 15}, CellState::Free);
         else
           tree.setCell({3, 2, 1}, CellState::Occupied);
-        ASSERT_EQ(uniform_root, node::isUniform(tree.rootWord()));
+        ASSERT_EQ(uniform_root, node::isUniform(tree.root().word));
         FastOctTree unlimited = tree;
         unlimited.setBox(w.lo, w.hi, CellState::Occupied);
         tree.setMaxMemoryBytes(std::max(cap, tree.poolWords() * sizeof(NodeWord)));

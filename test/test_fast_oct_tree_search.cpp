@@ -11,7 +11,7 @@
 #include <pcl/search/brute_force.h>
 #include <flann/flann.hpp>
 
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
 
 #include "scan_data.h"
 

@@ -15,7 +15,7 @@
 #include <boost/crc.hpp>
 
 #include <pcl_fot/io/fot_file.h>
-#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
 
 #include "scan_data.h"
 

@@ -6,9 +6,8 @@
 #include <tuple>
 #include <vector>
 
-#include <pcl_fot/nearest_neighbor.h>
-#include <pcl_fot/occupancy_mapping.h>
-#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/search/nearest_cell_search.h>
 
 #include "scan_data.h"
 
@@ -111,7 +110,7 @@ TEST(NearestCellSearch, RandomClustersWithCollapsedCubes) {
 }
 
 TEST(NearestCellSearch, RealScansInSpatialOrder) {
-  const VoxelGrid grid(0.05);
+  const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
   insertPointCloud(query_map, *pcl_fot_test::loadScan("room_scan2.pcd"));
@@ -200,7 +199,7 @@ TEST(NearestCellSearch, BatchAnswersAsSingleQueries) {
 }
 
 TEST(NearestCellSearch, BatchOnRealScans) {
-  const VoxelGrid grid(0.05);
+  const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
   insertPointCloud(query_map, *pcl_fot_test::loadScan("room_scan2.pcd"));

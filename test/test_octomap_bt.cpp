@@ -8,8 +8,8 @@
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
 
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/io/octomap.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
 
 #include "octomap_checks.h"
 #include "scan_data.h"
@@ -24,7 +24,7 @@ const pcl::PointCloud<pcl::PointXYZ>& roomScan() {
 }
 
 /** room_scan1 ray-traced at 5 cm on the given grid. */
-FastOctTree ourMap(const VoxelGrid& grid) {
+FastOctTree ourMap(const CellGrid& grid) {
   FastOctTree t(grid);
   insertScan(t, roomScan());
   return t;
@@ -40,7 +40,7 @@ std::unique_ptr<octomap::OcTree> readWithOctoMap(const std::string& bt) {
 }  // namespace
 
 TEST(OctoMapBt, ExportedMapsLoadInOctoMapWithOurCells) {
-  for (const VoxelGrid& grid : {VoxelGrid(0.05), VoxelGrid(0.05, 0.15, -0.1, 2.0)}) {
+  for (const CellGrid& grid : {CellGrid(0.05), CellGrid(0.05, 0.15, -0.1, 2.0)}) {
     const FastOctTree ours = ourMap(grid);
     ASSERT_GT(ours.getFreeCount(), 100000u);
     const auto om = readWithOctoMap(io::encodeBt(ours));
@@ -62,7 +62,7 @@ TEST(OctoMapBt, ImportedOctoMapsHaveOctoMapsCells) {
   const FastOctTree ours = io::decodeBt(bt.data(), bt.size(), "octomap.bt");
   expectSameCells(om, ours);
   // The same cells on a grid whose origin is a whole number of cells away.
-  io::BtImportOptions shifted;
+  io::OctoMapImportOptions shifted;
   shifted.origin[0] = -0.25;
   shifted.origin[2] = 0.1;
   expectSameCells(om, io::decodeBt(bt.data(), bt.size(), "octomap.bt", shifted));
@@ -106,7 +106,7 @@ TEST(OctoMapBt, EveryOccupancyTreeTypeImports) {
 }
 
 TEST(OctoMapBt, RoundTripAndEmptyMaps) {
-  const FastOctTree ours = ourMap(VoxelGrid(0.05));
+  const FastOctTree ours = ourMap(CellGrid(0.05));
   const std::string bt = io::encodeBt(ours);
   EXPECT_TRUE(io::decodeBt(bt.data(), bt.size()) == ours);
   const FastOctTree empty(0.1);
@@ -122,16 +122,16 @@ TEST(OctoMapBt, WhatOctoMapCannotHoldIsRefused) {
   FastOctTree far(0.05);
   far.setCell({40000, 0, 0}, CellState::Occupied);  // beyond 32768 cells from 0
   EXPECT_THROW(io::encodeBt(far), std::invalid_argument);
-  const std::string bt = io::encodeBt(ourMap(VoxelGrid(0.05)));
-  io::BtImportOptions off_grid;
+  const std::string bt = io::encodeBt(ourMap(CellGrid(0.05)));
+  io::OctoMapImportOptions off_grid;
   off_grid.origin[1] = 0.02;
   EXPECT_THROW(io::decodeBt(bt.data(), bt.size(), "x.bt", off_grid), std::invalid_argument);
 }
 
 TEST(OctoMapBt, DamagedFilesFailCleanlyOrLoadValidMaps) {
-  const std::string good = io::encodeBt(ourMap(VoxelGrid(0.2)));  // coarse, so that 1000 variants stay quick
+  const std::string good = io::encodeBt(ourMap(CellGrid(0.2)));  // coarse, so that 1000 variants stay quick
   const std::size_t body = good.find("data\n") + 5;
-  io::BtImportOptions capped;
+  io::OctoMapImportOptions capped;
   capped.max_pool_bytes = 8 << 20;  // a flipped bit can turn an inner node into a huge leaf
   std::mt19937 rng(1);
   int refused = 0, loaded = 0;

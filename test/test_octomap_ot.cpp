@@ -9,8 +9,7 @@
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
 
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/io/octomap_ot.h>
+#include <pcl_fot/io/octomap.h>
 
 #include "octomap_checks.h"
 #include "scan_data.h"
@@ -51,7 +50,7 @@ TEST(OctoMapOt, EveryLeafIsOctoMapsState) {
   ASSERT_TRUE(om.writeBinaryConst(bt));
   EXPECT_TRUE(io::decodeBt(bt.str().data(), bt.str().size()) == ours);
   // On a grid whose origin is a whole number of cells away.
-  io::BtImportOptions shifted;
+  io::OctoMapImportOptions shifted;
   shifted.origin[1] = -0.35;
   expectSameCells(om, io::decodeOt(bytes.data(), bytes.size(), "room.ot", shifted));
 }
@@ -108,7 +107,7 @@ TEST(OctoMapOt, DamagedFilesFailCleanlyOrLoadValidMaps) {
   mapRoom(om);
   const std::string good = ot(om);
   const std::size_t body = good.find("data\n") + 5;
-  io::BtImportOptions capped;
+  io::OctoMapImportOptions capped;
   capped.max_pool_bytes = 8 << 20;  // a flipped bit can turn a deep leaf into a huge cube
   std::mt19937 rng(2);
   int refused = 0, loaded = 0;

@@ -11,7 +11,7 @@
 #include <pcl/octree/octree_pointcloud_occupancy.h>
 #include <pcl/octree/octree_search.h>
 
-#include <pcl_fot/octree_point_cloud.h>
+#include <pcl_fot/pcl/octree_point_cloud.h>
 
 #include "scan_data.h"
 

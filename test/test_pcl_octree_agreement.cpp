@@ -4,8 +4,8 @@
 #include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
 #include <pcl/octree/octree_pointcloud_occupancy.h>
 
-#include <pcl_fot/fast_oct_tree.h>
-#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "scan_data.h"
 

@@ -7,9 +7,9 @@
 
 #include <pcl/common/transforms.h>
 
-#include <pcl_fot/distance_map.h>
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/psi.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/psi/distance_map.h>
+#include <pcl_fot/psi/psi.h>
 
 #include "scan_data.h"
 
@@ -61,7 +61,7 @@ void expectSame(const PsiResult& a, const PsiResult& b, const char* what) {
 
 /** The same cells in a tree and in a grid of the given side centred on key 0. */
 struct TwinMaps {
-  TwinMaps(double res, std::uint32_t side) : tree(res), grid(VoxelGrid(res), side) {}
+  TwinMaps(double res, std::uint32_t side) : tree(res), grid(CellGrid(res), side) {}
   void set(const Key& k, CellState s) {
     tree.setCell(k, s);
     grid.setCell(k, s);
@@ -165,7 +165,7 @@ TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
   for (const Case& c : {Case{"kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02, 256},
                         Case{"room_scan1.pcd", "room_scan2.pcd", 0.1, 512}}) {
     SCOPED_TRACE(c.a);
-    const VoxelGrid grid(c.res);
+    const CellGrid grid(c.res);
     FastOctTree ta(grid), tb(grid);
     const auto ca = pcl_fot_test::loadScan(c.a), cb = pcl_fot_test::loadScan(c.b);
     insertPointCloud(ta, *ca);
@@ -191,7 +191,7 @@ TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
 }
 
 TEST(Psi, ZeroForEqualMapsAndSymmetric) {
-  const VoxelGrid grid(0.05);
+  const CellGrid grid(0.05);
   FastOctTree a(grid), b(grid);
   insertPointCloud(a, *pcl_fot_test::loadScan("room_scan1.pcd"));
   insertPointCloud(b, *pcl_fot_test::loadScan("room_scan2.pcd"));
@@ -238,6 +238,6 @@ TEST(Psi, ErrorsAndEmptySides) {
   const PsiResult r = psi(a, empty, capped);
   EXPECT_TRUE(r.defined);
   EXPECT_EQ(r.sum, 7u) << "each unmatched cell counts the cap";
-  FastOccMesh g1(VoxelGrid(0.1), 16), g2(VoxelGrid(0.1), 32);
+  FastOccMesh g1(CellGrid(0.1), 16), g2(CellGrid(0.1), 32);
   EXPECT_THROW(psiByDistanceMaps(g1, g2), std::invalid_argument);
 }

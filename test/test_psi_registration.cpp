@@ -7,14 +7,14 @@
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/icp.h>
 
-#include <pcl_fot/registration/correspondence_rejection_psi.h>
-#include <pcl_fot/registration/transformation_validation_psi.h>
+#include <pcl_fot/pcl/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/transformation_validation_psi.h>
 
 #include "scan_data.h"
 
 using pcl::PointXYZ;
 using Cloud = pcl::PointCloud<PointXYZ>;
-using Validation = pcl::registration::TransformationValidationPsi<PointXYZ, PointXYZ>;
+using Validation = pcl::fot::registration::TransformationValidationPsi<PointXYZ, PointXYZ>;
 
 namespace {
 
@@ -124,11 +124,11 @@ TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
     icp.setTransformationEpsilon(1e-12);
     icp.setEuclideanFitnessEpsilon(0);
     icp.setMaxCorrespondenceDistance(0.5);
-    auto rejector = pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<PointXYZ>>(0.1, 1.0);
+    auto rejector = pcl::make_shared<pcl::fot::registration::CorrespondenceRejectorPsi<PointXYZ>>(0.1, 1.0);
     rejector->setCallback([&](std::size_t, double, double m) { mse.push_back(m); });
     icp.addCorrespondenceRejector(rejector);
     if (stop_on_psi) {
-      auto criteria = pcl::make_shared<pcl::registration::PsiConvergenceCriteria<float>>(
+      auto criteria = pcl::make_shared<pcl::fot::registration::PsiConvergenceCriteria<float>>(
           *icp.getConvergeCriteria(), rejector->history());
       criteria->setRelativePsiImprovement(0.01);
       icp.convergence_criteria_ = criteria;

@@ -12,13 +12,13 @@
 #include <octomap/OcTree.h>
 #include <pcl/common/transforms.h>
 
-#include <pcl_fot/cast_ray.h>
-#include <pcl_fot/fast_occ_mesh.h>
-#include <pcl_fot/fast_oct_tree.h>
-#include <pcl_fot/occupancy_mapping.h>
-#include <pcl_fot/ray_caster.h>
+#include <pcl_fot/dense/fast_occ_mesh.h>
+#include <pcl_fot/mapping/cast_ray.h>
+#include <pcl_fot/mapping/ray_traversal.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
-#include "block_ray_walker.h"
+#include "mapping/block_ray_walker.h"
 #include "scan_data.h"
 
 using namespace pcl::fot;
@@ -41,7 +41,7 @@ Key fromOctoMap(const octomap::OcTreeKey& k) {
   return Key{int(k[0]) - kOctoMapKeyOffset, int(k[1]) - kOctoMapKeyOffset, int(k[2]) - kOctoMapKeyOffset};
 }
 
-std::vector<Key> ourRay(const VoxelGrid& grid, const float o[3], const float e[3]) {
+std::vector<Key> ourRay(const CellGrid& grid, const float o[3], const float e[3]) {
   std::vector<Key> keys;
   const std::size_t cells = traceSegment(grid, o, e, [&](const Key& k) { keys.push_back(k); });
   EXPECT_EQ(cells, keys.size());
@@ -51,7 +51,7 @@ std::vector<Key> ourRay(const VoxelGrid& grid, const float o[3], const float e[3
 void expectSameRaysAsOctoMap(const Cloud& cloud, double res, const float origin[3]) {
   octomap::OcTree reference(res);
   octomap::KeyRay ray;
-  const VoxelGrid grid(res);
+  const CellGrid grid(res);
   std::size_t rays = 0, keys = 0;
   for (const auto& p : cloud) {
     if (!std::isfinite(p.x)) continue;
@@ -126,7 +126,7 @@ TEST(RayCaster, SameCellsAsOctoMapFromAnOffCentreSensor) {
 }
 
 TEST(RayCaster, SegmentEndsExcludeTheEndCell) {
-  const VoxelGrid grid(1.0);
+  const CellGrid grid(1.0);
   const float o[3] = {0.5f, 0.5f, 0.5f}, e[3] = {4.5f, 0.5f, 0.5f};
   const std::vector<Key> keys = ourRay(grid, o, e);
   ASSERT_EQ(keys.size(), 4u);
@@ -159,7 +159,7 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> coord(-3.0f, 3.0f);
   for (double res : {0.01, 0.05, 0.0625, 0.3}) {
-    const VoxelGrid grid(res);
+    const CellGrid grid(res);
     // A sensor anywhere, and one at a cell centre: from there, at a power-of-two resolution, exact
     // diagonals tie at every crossing.
     const float centre = float(0.5 * res);
@@ -231,7 +231,7 @@ TEST(ScanInsertion, SameCellsAsOctoMapWithAMaximumRange) {
 
 TEST(ScanInsertion, TreeAndGridAgreeCellForCell) {
   const auto cloud = pcl_fot_test::loadScan("kinect_capture0003.pcd");
-  const VoxelGrid vg(0.02);
+  const CellGrid vg(0.02);
   FastOctTree tree(vg), tree_plain(vg);
   FastOccMesh grid(vg, 512);
   ScanOptions plain;
@@ -287,11 +287,11 @@ TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {
   std::uint64_t ray_cells = 0;
   for (const auto& e : ends) {
     cloud.push_back(pcl::PointXYZ(e[0], e[1], e[2]));
-    const std::vector<Key> walk = ourRay(VoxelGrid(res), sensor, e.data());
+    const std::vector<Key> walk = ourRay(CellGrid(res), sensor, e.data());
     ray_cells += walk.size();
     expected_free.insert(expected_free.end(), walk.begin(), walk.end());
     Key k;
-    ASSERT_TRUE(VoxelGrid(res).pointToKey(e[0], e[1], e[2], k));
+    ASSERT_TRUE(CellGrid(res).pointToKey(e[0], e[1], e[2], k));
     endpoints.push_back(k);
   }
   const auto less = [](const Key& a, const Key& b) {
@@ -399,7 +399,7 @@ TEST(CastRay, StopsAtTheFirstCellThatIsNotFree) {
 
 TEST(CastRay, SameAnswerOnTreeAndGridOverARealMap) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
-  const VoxelGrid vg(0.05);
+  const CellGrid vg(0.05);
   FastOctTree tree(vg);
   FastOccMesh grid(vg, 1024);
   insertScan(tree, *cloud);

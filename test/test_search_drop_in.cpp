@@ -20,7 +20,7 @@
 #include <pcl/surface/gp3.h>
 #include <pcl/surface/mls.h>
 
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
 
 #include "scan_data.h"
 

@@ -11,9 +11,9 @@
 #include <pcl/io/vtk_lib_io.h>
 #include <unistd.h>
 
-#include <pcl_fot/accessor.h>
 #include <pcl_fot/io/voxel_export.h>
-#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/accessor.h>
 
 #include "scan_data.h"
 

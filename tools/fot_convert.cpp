@@ -7,10 +7,9 @@
 #include <pcl/console/time.h>
 
 #include <pcl_fot/io/fot_file.h>
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/io/octomap_ot.h>
+#include <pcl_fot/io/octomap.h>
 #include <pcl_fot/io/voxel_export.h>
-#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
 
 #include "cloud_file.h"
 #include "tool_common.h"
@@ -38,6 +37,74 @@ void printHelp(const char* prog) {
       prog);
 }
 
+/** -color, for an output of extension `out_ext`. */
+pcl::fot::io::VoxelColoring coloring(const Arguments& args, const std::string& out_ext) {
+  std::string color = "height";
+  args.get("-color", color);
+  if (color == "height") return pcl::fot::io::VoxelColoring::Height;
+  if (color == "state") return pcl::fot::io::VoxelColoring::State;
+  if (color == "none" && out_ext == ".pcd") return pcl::fot::io::VoxelColoring::None;
+  throw ToolError(kExitUsage, "option -color takes height, state or none (.pcd only)");
+}
+
+/** A map of a point cloud's points, no ray tracing; names an origin that fits when points lie beyond it. */
+pcl::fot::FastOctTree mapOfCloud(const std::string& input, const Arguments& args,
+                                 const std::vector<double>& origin) {
+  double res = 0;
+  if (!args.getResolution(res)) throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
+  const std::string bad_grid = pcl::fot::CellGrid::whyInvalid(res, origin[0], origin[1], origin[2]);
+  if (!bad_grid.empty()) throw ToolError(kExitUsage, "options -res and -origin: " + bad_grid);
+  const auto cloud = loadCloud(input);
+  pcl::fot::FastOctTree tree(pcl::fot::CellGrid(res, origin[0], origin[1], origin[2]));
+  const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
+  print_info("Inserted %zu points (skipped %zu NaN/Inf, %zu out of range)\n", st.inserted, st.non_finite,
+             st.out_of_range);
+  if (st.out_of_range > 0) {  // georeferenced data, usually: the keys reach 2^29 cells from the origin
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (const auto& p : *cloud)
+      if (pcl::isFinite(p)) {
+        lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
+        hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
+      }
+    const Eigen::Vector3d centre = (lo + hi) / 2;
+    print_warn(
+        "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
+        "%.0f,%.0f,%.0f\n",
+        st.out_of_range, centre.x(), centre.y(), centre.z());
+  }
+  return tree;
+}
+
+/** The input map, by its extension. */
+pcl::fot::FastOctTree readInput(const std::string& input, const Arguments& args,
+                                const std::vector<double>& origin) {
+  const std::string in_ext = extension(input);
+  if (in_ext == ".pcd" || in_ext == ".ply") return mapOfCloud(input, args, origin);
+  if (in_ext == ".bt" || in_ext == ".ot") {
+    pcl::fot::io::OctoMapImportOptions options;
+    std::copy(origin.begin(), origin.end(), options.origin);
+    return in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
+  }
+  if (in_ext == ".fot") return pcl::fot::io::loadFot(input);
+  throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
+}
+
+/** Writes the map by the output's extension; returns what was written. */
+std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& output,
+                        const std::string& out_ext, const pcl::fot::io::VoxelExportOptions& exported) {
+  if (out_ext == ".fot") {
+    pcl::fot::io::saveFot(tree, output);
+    return "map";
+  }
+  if (out_ext == ".bt") {
+    pcl::fot::io::saveBt(tree, output);
+    return "OctoMap map";
+  }
+  if (out_ext == ".pcd")
+    return std::to_string(pcl::fot::io::saveVoxelCentersPCD(tree, output, exported)) + " voxel centres";
+  return std::to_string(pcl::fot::io::saveVoxelMeshVTK(tree, output, exported)) + " cube faces";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -59,67 +126,12 @@ int main(int argc, char** argv) {
     args.get("-origin", origin, 3);
     pcl::fot::io::VoxelExportOptions exported;
     exported.include_free = args.has("-free");
-    std::string color = "height";
-    args.get("-color", color);
-    if (color == "height")
-      exported.coloring = pcl::fot::io::VoxelColoring::Height;
-    else if (color == "state")
-      exported.coloring = pcl::fot::io::VoxelColoring::State;
-    else if (color == "none" && out_ext == ".pcd")
-      exported.coloring = pcl::fot::io::VoxelColoring::None;
-    else
-      throw ToolError(kExitUsage, "option -color takes height, state or none (.pcd only)");
+    exported.coloring = coloring(args, out_ext);
 
     TicToc timer;
     timer.tic();
-    const std::string in_ext = extension(input);
-    pcl::fot::FastOctTree tree(1.0);
-    if (in_ext == ".pcd" || in_ext == ".ply") {
-      double res = 0;
-      if (!args.getResolution(res)) throw ToolError(kExitUsage, "a point cloud input needs -res (see -h)");
-      const std::string bad_grid = pcl::fot::VoxelGrid::whyInvalid(res, origin[0], origin[1], origin[2]);
-      if (!bad_grid.empty()) throw ToolError(kExitUsage, "options -res and -origin: " + bad_grid);
-      const auto cloud = loadCloud(input);
-      tree = pcl::fot::FastOctTree(pcl::fot::VoxelGrid(res, origin[0], origin[1], origin[2]));
-      const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
-      print_info("Inserted %zu points (skipped %zu NaN/Inf, %zu out of range)\n", st.inserted, st.non_finite,
-                 st.out_of_range);
-      if (st.out_of_range > 0) {  // georeferenced data, usually: the keys reach 2^29 cells from the origin
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-        for (const auto& p : *cloud)
-          if (pcl::isFinite(p)) {
-            lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
-            hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
-          }
-        const Eigen::Vector3d centre = (lo + hi) / 2;
-        print_warn(
-            "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
-            "%.0f,%.0f,%.0f\n",
-            st.out_of_range, centre.x(), centre.y(), centre.z());
-      }
-    } else if (in_ext == ".bt" || in_ext == ".ot") {
-      pcl::fot::io::BtImportOptions options;
-      std::copy(origin.begin(), origin.end(), options.origin);
-      tree = in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
-    } else if (in_ext == ".fot") {
-      tree = pcl::fot::io::loadFot(input);
-    } else {
-      throw ToolError(kExitUsage,
-                      "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
-    }
-
-    std::string what;
-    if (out_ext == ".fot") {
-      pcl::fot::io::saveFot(tree, output);
-      what = "map";
-    } else if (out_ext == ".bt") {
-      pcl::fot::io::saveBt(tree, output);
-      what = "OctoMap map";
-    } else if (out_ext == ".pcd") {
-      what = std::to_string(pcl::fot::io::saveVoxelCentersPCD(tree, output, exported)) + " voxel centres";
-    } else {
-      what = std::to_string(pcl::fot::io::saveVoxelMeshVTK(tree, output, exported)) + " cube faces";
-    }
+    const pcl::fot::FastOctTree tree = readInput(input, args, origin);
+    const std::string what = writeOutput(tree, output, out_ext, exported);
     print_info("Wrote %s (%s: %llu occupied, %llu free cells) in %.0f ms\n", output.c_str(), what.c_str(),
                (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(),
                timer.toc());

@@ -11,8 +11,8 @@
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/icp.h>
 
-#include <pcl_fot/registration/correspondence_rejection_psi.h>
-#include <pcl_fot/registration/transformation_validation_psi.h>
+#include <pcl_fot/pcl/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/transformation_validation_psi.h>
 
 #include "cloud_file.h"
 #include "tool_common.h"
@@ -103,8 +103,8 @@ int main(int argc, char** argv) {
     icp.setMaximumIterations(iterations);
     icp.setMaxCorrespondenceDistance(max_corr);
 
-    const pcl::registration::TransformationValidationPsi<pcl::PointXYZ, pcl::PointXYZ> validation(res,
-                                                                                                  max_range);
+    const pcl::fot::registration::TransformationValidationPsi<pcl::PointXYZ, pcl::PointXYZ> validation(
+        res, max_range);
     print_info("%zu source and %zu target points; psi at %g m cells, capped at %g m\n", source->size(),
                target->size(), res, max_range);
     print_info("%-12s %12s %18s %16s\n", "", "psi [m]", "getFitnessScore", "corr. MSE");
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
 
     // ICP hands the rejector each iteration's pose before the step: ψ and ICP's fitness there.
     auto rejector =
-        pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<pcl::PointXYZ>>(res, max_range);
+        pcl::make_shared<pcl::fot::registration::CorrespondenceRejectorPsi<pcl::PointXYZ>>(res, max_range);
     rejector->setCallback([&](std::size_t iteration, double psi, double mse) {
       print_info("iteration %-2zu %12.5f %18.6f %16.6f\n", iteration + 1, psi, icp.getFitnessScore(), mse);
     });

@@ -23,7 +23,7 @@ void printHelp(const char* prog) {
 
 void describe(const std::string& path) {
   const pcl::fot::FastOctTree tree = loadMap(path);
-  const pcl::fot::VoxelGrid& grid = tree.getGrid();
+  const pcl::fot::CellGrid& grid = tree.getGrid();
   print_info("%s\n", path.c_str());
   print_info("  resolution      %.17g m\n", grid.resolution());
   print_info("  origin          %.17g %.17g %.17g\n", grid.origin()[0], grid.origin()[1], grid.origin()[2]);

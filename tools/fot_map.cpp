@@ -12,10 +12,10 @@
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
 
-#include <pcl_fot/fast_oct_tree.h>
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/voxel_export.h>
-#include <pcl_fot/occupancy_mapping.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "cloud_file.h"
 #include "synthetic_scene.h"
@@ -108,6 +108,90 @@ void progress(std::size_t done, std::size_t total, double seconds) {
   if (done == total) std::fprintf(stderr, "\n");
 }
 
+/** The sensor of scan i in the map frame: its pose line, or its VIEWPOINT. */
+Eigen::Vector3f sensorOf(const std::vector<Cloud::Ptr>& scans, const std::vector<Eigen::Affine3f>& poses,
+                         std::size_t i) {
+  return poses.empty() ? Eigen::Vector3f(scans[i]->sensor_origin_.head<3>()) : poses[i].translation();
+}
+
+/** Refuses, before any tracing, a sensor off the map's keys and rays too long to trace: a bad pose. */
+void checkScans(const std::vector<Cloud::Ptr>& scans, const std::vector<Eigen::Affine3f>& poses,
+                const pcl::fot::CellGrid& grid, const pcl::fot::ScanOptions& options) {
+  double ray_cells = 0;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const Eigen::Vector3f sensor = sensorOf(scans, poses, i);
+    pcl::fot::Key key;
+    if (!grid.pointToKey(sensor.x(), sensor.y(), sensor.z(), key)) {
+      char where[96];
+      std::snprintf(where, sizeof(where), "(%g, %g, %g)", sensor.x(), sensor.y(), sensor.z());
+      throw ToolError(kExitInput, "scan " + std::to_string(i + 1) + "'s sensor at " + where +
+                                      " is not finite or lies beyond the map's 2^29 cells");
+    }
+    ray_cells += rayCells(*scans[i], grid.resolution(), options);
+    if (ray_cells > kMaxRayCells) {
+      char cells[32];
+      std::snprintf(cells, sizeof(cells), "%.3g", ray_cells);
+      throw ToolError(kExitInput,
+                      "the rays up to scan " + std::to_string(i + 1) + " would cross " + cells +
+                          " cells (the limit is 1e10): is its sensor pose missing? Give it with "
+                          "-poses, cut the rays with -max_range, or map the points alone with fot_convert");
+    }
+  }
+}
+
+/** Traces every scan into the map, with a progress bar; returns the totals. */
+pcl::fot::ScanStats mapScans(pcl::fot::FastOctTree& tree, const std::vector<Cloud::Ptr>& scans,
+                             const std::vector<Eigen::Affine3f>& poses, const pcl::fot::ScanOptions& options,
+                             TicToc& timer) {
+  pcl::fot::ScanStats total;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    progress(i, scans.size(), timer.toc() / 1000.0);
+    const pcl::fot::ScanStats st = poses.empty() ? pcl::fot::insertScan(tree, *scans[i], options)
+                                                 : pcl::fot::insertScan(tree, *scans[i], poses[i], options);
+    if (st.rays == 0)
+      print_warn("\nScan %zu has no point to trace (%zu NaN/Inf, %zu out of range, %zu too close).\n", i + 1,
+                 st.non_finite, st.out_of_range, st.too_close);
+    total.rays += st.rays;
+    total.non_finite += st.non_finite;
+    total.out_of_range += st.out_of_range;
+    total.ray_cells += st.ray_cells;
+  }
+  progress(scans.size(), scans.size(), timer.toc() / 1000.0);
+  return total;
+}
+
+/** Writes the map and its viewer files, and prints what they hold. */
+void writeOutputs(const pcl::fot::FastOctTree& tree, const std::string& out, bool with_free,
+                  std::size_t scans, const pcl::fot::ScanStats& total) {
+  const std::string map_file = out + ".fot", centres_file = out + "_occupied.pcd",
+                    mesh_file = out + "_mesh.vtk";
+  pcl::fot::io::saveFot(tree, map_file);
+  const std::size_t centres = pcl::fot::io::saveVoxelCentersPCD(tree, centres_file);
+  const std::size_t faces = pcl::fot::io::saveVoxelMeshVTK(tree, mesh_file);
+
+  print_info("Map summary\n");
+  print_info("  scans              %zu\n", scans);
+  print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n",
+             total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
+  print_info("  resolution         %g m\n", tree.getResolution());
+  print_info("  depth              %u levels\n", tree.getDepth());
+  print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
+  print_info("  free cells         %llu\n", (unsigned long long)tree.getFreeCount());
+  print_info("  node words         %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
+  print_info("  memory             %zu bytes\n", tree.getMemoryBytes());
+  print_info("Wrote %s (the map), %s (%zu voxel centres) and %s (%zu faces)\n", map_file.c_str(),
+             centres_file.c_str(), centres, mesh_file.c_str(), faces);
+  if (with_free) {
+    pcl::fot::io::VoxelExportOptions free_only;
+    free_only.include_free = true;
+    free_only.coloring = pcl::fot::io::VoxelColoring::State;
+    const std::string free_file = out + "_states.pcd";
+    print_info("Wrote %s (%zu voxel centres, occupied and free)\n", free_file.c_str(),
+               pcl::fot::io::saveVoxelCentersPCD(tree, free_file, free_only));
+  }
+  print_info("View them with: pcl_viewer %s   or   pcl_viewer %s\n", centres_file.c_str(), mesh_file.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -144,75 +228,11 @@ int main(int argc, char** argv) {
         throw ToolError(kExitInput, "the pose file has " + std::to_string(poses.size()) + " poses for " +
                                         std::to_string(scans.size()) + " scans");
     }
-
-    // Checked before any tracing, so that a bad pose costs no work.
-    const pcl::fot::VoxelGrid grid(res);
-    double ray_cells = 0;
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      const Eigen::Vector3f sensor =
-          with_poses ? poses[i].translation() : Eigen::Vector3f(scans[i]->sensor_origin_.head<3>());
-      pcl::fot::Key key;
-      if (!grid.pointToKey(sensor.x(), sensor.y(), sensor.z(), key)) {
-        char where[96];
-        std::snprintf(where, sizeof(where), "(%g, %g, %g)", sensor.x(), sensor.y(), sensor.z());
-        throw ToolError(kExitInput, "scan " + std::to_string(i + 1) + "'s sensor at " + where +
-                                        " is not finite or lies beyond the map's 2^29 cells");
-      }
-      ray_cells += rayCells(*scans[i], res, options);
-      if (ray_cells > kMaxRayCells) {
-        char cells[32];
-        std::snprintf(cells, sizeof(cells), "%.3g", ray_cells);
-        throw ToolError(kExitInput,
-                        "the rays up to scan " + std::to_string(i + 1) + " would cross " + cells +
-                            " cells (the limit is 1e10): is its sensor pose missing? Give it with "
-                            "-poses, cut the rays with -max_range, or map the points alone with fot_convert");
-      }
-    }
-
+    const pcl::fot::CellGrid grid(res);
+    checkScans(scans, poses, grid, options);
     pcl::fot::FastOctTree tree(grid);
-    pcl::fot::ScanStats total;
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      progress(i, scans.size(), timer.toc() / 1000.0);
-      const pcl::fot::ScanStats st = with_poses ? pcl::fot::insertScan(tree, *scans[i], poses[i], options)
-                                                : pcl::fot::insertScan(tree, *scans[i], options);
-      if (st.rays == 0)
-        print_warn("\nScan %zu has no point to trace (%zu NaN/Inf, %zu out of range, %zu too close).\n",
-                   i + 1, st.non_finite, st.out_of_range, st.too_close);
-      total.rays += st.rays;
-      total.non_finite += st.non_finite;
-      total.out_of_range += st.out_of_range;
-      total.ray_cells += st.ray_cells;
-    }
-    progress(scans.size(), scans.size(), timer.toc() / 1000.0);
-
-    const std::string map_file = out + ".fot", centres_file = out + "_occupied.pcd",
-                      mesh_file = out + "_mesh.vtk";
-    pcl::fot::io::saveFot(tree, map_file);
-    const std::size_t centres = pcl::fot::io::saveVoxelCentersPCD(tree, centres_file);
-    const std::size_t faces = pcl::fot::io::saveVoxelMeshVTK(tree, mesh_file);
-
-    print_info("Map summary\n");
-    print_info("  scans              %zu\n", scans.size());
-    print_info("  rays traced        %zu through %llu cells (skipped: %zu NaN/Inf, %zu out of range)\n",
-               total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
-    print_info("  resolution         %g m\n", tree.getResolution());
-    print_info("  depth              %u levels\n", tree.getDepth());
-    print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
-    print_info("  free cells         %llu\n", (unsigned long long)tree.getFreeCount());
-    print_info("  node words         %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
-    print_info("  memory             %zu bytes\n", tree.getMemoryBytes());
-    print_info("Wrote %s (the map), %s (%zu voxel centres) and %s (%zu faces)\n", map_file.c_str(),
-               centres_file.c_str(), centres, mesh_file.c_str(), faces);
-    if (args.has("-free")) {
-      pcl::fot::io::VoxelExportOptions free_only;
-      free_only.include_free = true;
-      free_only.coloring = pcl::fot::io::VoxelColoring::State;
-      const std::string free_file = out + "_states.pcd";
-      print_info("Wrote %s (%zu voxel centres, occupied and free)\n", free_file.c_str(),
-                 pcl::fot::io::saveVoxelCentersPCD(tree, free_file, free_only));
-    }
-    print_info("View them with: pcl_viewer %s   or   pcl_viewer %s\n", centres_file.c_str(),
-               mesh_file.c_str());
+    const pcl::fot::ScanStats total = mapScans(tree, scans, poses, options, timer);
+    writeOutputs(tree, out, args.has("-free"), scans.size(), total);
     print_info("Done in %.0f ms\n", timer.toc());
     return kExitOk;
   });

@@ -7,8 +7,8 @@
 #include <pcl/console/print.h>
 #include <pcl/console/time.h>
 
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/psi.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/psi/psi.h>
 
 #include "cloud_file.h"
 #include "tool_common.h"
@@ -40,7 +40,7 @@ void printHelp(const char* prog) {
 }
 
 /** "0.05 m cells from (0, 0, 0)" */
-std::string describe(const pcl::fot::VoxelGrid& grid) {
+std::string describe(const pcl::fot::CellGrid& grid) {
   char text[160];
   std::snprintf(text, sizeof text, "%.9g m cells from (%.9g, %.9g, %.9g)", grid.resolution(),
                 grid.origin()[0], grid.origin()[1], grid.origin()[2]);
@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 2; ++i)
       if (isMapFile(paths[i])) maps[i] = loadMap(paths[i]);
     if (maps[0] && transformed) throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
-    pcl::fot::VoxelGrid cloud_grid(res);
+    pcl::fot::CellGrid cloud_grid(res);
     if (!args.has("-res") && (maps[0] || maps[1])) cloud_grid = (maps[0] ? maps[0] : maps[1])->getGrid();
     for (int i = 0; i < 2; ++i) {
       if (maps[i]) continue;

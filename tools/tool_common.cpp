@@ -12,8 +12,7 @@
 #include <pcl/console/print.h>
 
 #include <pcl_fot/io/fot_file.h>
-#include <pcl_fot/io/octomap_bt.h>
-#include <pcl_fot/io/octomap_ot.h>
+#include <pcl_fot/io/octomap.h>
 
 namespace fot_tools {
 namespace {
@@ -89,7 +88,7 @@ bool Arguments::getPositive(const std::string& name, double& value) const {
 
 bool Arguments::getResolution(double& value) const {
   if (!getPositive("-res", value)) return false;
-  const std::string why = pcl::fot::VoxelGrid::whyInvalid(value, 0.0, 0.0, 0.0);
+  const std::string why = pcl::fot::CellGrid::whyInvalid(value, 0.0, 0.0, 0.0);
   if (!why.empty()) throw ToolError(kExitUsage, "option -res: " + why);
   return true;
 }

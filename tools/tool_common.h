@@ -11,7 +11,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace fot_tools {
 
@@ -42,7 +42,7 @@ class Arguments {
   bool get(const std::string& name, std::vector<double>& values, std::size_t count) const;
   /** A positive, finite value, if given. */
   bool getPositive(const std::string& name, double& value) const;
-  /** -res, if given: a resolution VoxelGrid accepts, with cell centres that are floats. */
+  /** -res, if given: a resolution CellGrid accepts, with cell centres that are floats. */
   bool getResolution(double& value) const;
   const std::vector<std::string>& positional() const { return positional_; }
 

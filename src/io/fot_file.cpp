@@ -53,7 +53,7 @@ std::uint32_t crc32(const char* data, std::size_t size) {
 
 std::string encodeFot(const FastOctTree& tree) {
   const FastOctTree::CanonicalPool pool = tree.canonicalPool();
-  const VoxelGrid& grid = tree.getGrid();
+  const CellGrid& grid = tree.getGrid();
   const std::uint64_t blocks = pool.words.size() / 8 - 1;
   std::string out(kMagic, sizeof(kMagic));
   out.reserve(kHeaderBytes + pool.words.size() * 4 + kChecksumBytes);
@@ -62,7 +62,7 @@ std::string encodeFot(const FastOctTree& tree) {
   putDouble(out, grid.resolution());
   for (int a = 0; a < 3; ++a) putDouble(out, grid.origin()[a]);
   put32(out, pool.root_level);
-  for (std::uint32_t b : pool.root_base) put32(out, b);
+  for (std::uint32_t b : pool.root_base.u) put32(out, b);
   put64(out, 1 + 8 * blocks);
   put64(out, blocks);
   put64(out, tree.getOccupiedCount());
@@ -89,7 +89,7 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
   if (size < kHeaderBytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32),
                oz = getDouble(p + 40);
-  const std::string bad_grid = VoxelGrid::whyInvalid(res, ox, oy, oz);
+  const std::string bad_grid = CellGrid::whyInvalid(res, ox, oy, oz);
   if (!bad_grid.empty()) throw fail(bad_grid);
   FastOctTree::CanonicalPool pool;
   pool.root_level = get32(p + 48);
@@ -113,7 +113,7 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
   for (std::size_t i = 0; i < pool.words.size(); ++i) pool.words[i] = get32(p + kHeaderBytes + 4 * i);
   try {
     FastOctTree tree =
-        FastOctTree::fromCanonicalPool(VoxelGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
+        FastOctTree::fromCanonicalPool(CellGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
     if (tree.getOccupiedCount() != occupied || tree.getFreeCount() != free)
       throw fail("the cell counts in the header do not match the tree");
     return tree;

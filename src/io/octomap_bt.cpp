@@ -1,4 +1,4 @@
-#include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/octomap.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <pcl_fot/io/file_io.h>
 
-#include "octomap_format.h"
+#include "io/octomap_format.h"
 
 namespace pcl {
 namespace fot {
@@ -39,8 +39,7 @@ class BtWriter {
   /** A word of the tree at `level` and its subtree. */
   void node(NodeWord w, unsigned level) {
     NodeWord children[8];
-    for (unsigned o = 0; o < 8; ++o)
-      children[o] = node::isBitmap(w) ? node::uniform(node::state(w, o)) : words_[node::childBase(w) + o];
+    for (unsigned o = 0; o < 8; ++o) children[o] = NodeView::childWord(words_, w, o);
     std::uint32_t codes = 0;
     for (unsigned o = 0; o < 8; ++o) codes |= childCode(children[o]) << (2 * o);
     record(codes);
@@ -72,24 +71,23 @@ class BtReader {
   BtReader(const unsigned char* body, std::size_t size, FastOctTree& staging, const std::string& name)
       : at_(body), end_(body + size), staging_(staging), name_(name) {}
 
-  void node(unsigned depth, const std::int32_t corner[3]) {
+  void node(unsigned depth, const TreeCoord& corner) {
     if (end_ - at_ < 2) throw fail("the tree ends early: the file is truncated");
     const std::uint32_t codes = std::uint32_t(at_[0]) | std::uint32_t(at_[1]) << 8;
     at_ += 2;
-    const std::int32_t half = std::int32_t(1) << (kDepth - depth - 1);
+    const unsigned child_level = kDepth - depth - 1;
+    const std::int32_t half = std::int32_t(1) << child_level;
     for (unsigned o = 0; o < 8; ++o) {
       const unsigned code = (codes >> (2 * o)) & 3u;
       if (code == 0) continue;
       ++nodes_;
-      const std::int32_t child[3] = {corner[0] + std::int32_t(o & 1u) * half,
-                                     corner[1] + std::int32_t((o >> 1) & 1u) * half,
-                                     corner[2] + std::int32_t((o >> 2) & 1u) * half};
+      const TreeCoord child = corner.child(o, child_level);
       if (code == 3) {
         if (depth + 1 == kDepth) throw fail("a voxel at the deepest level has children");
         node(depth + 1, child);
         continue;
       }
-      const Key lo{stagingKey(child[0]), stagingKey(child[1]), stagingKey(child[2])};
+      const Key lo = child.key();
       const Key hi{lo.x + half - 1, lo.y + half - 1, lo.z + half - 1};
       staging_.setBox(lo, hi, code == 1 ? CellState::Free : CellState::Occupied);
     }
@@ -123,7 +121,7 @@ std::string exactDecimal(double v) {
 }  // namespace
 
 std::string encodeBt(const FastOctTree& tree) {
-  const VoxelGrid& grid = tree.getGrid();
+  const CellGrid& grid = tree.getGrid();
   const double res = grid.resolution();
   const std::int64_t shift_to_octomap[3] = {kCentre + cellsFromZero(grid.origin()[0], res, "x"),
                                             kCentre + cellsFromZero(grid.origin()[1], res, "y"),
@@ -147,10 +145,9 @@ std::string encodeBt(const FastOctTree& tree) {
   if (!staging.empty()) {
     // Every cell lies in OctoMap's root cube, so the staging root does too (a tree's root is the smallest
     // aligned cube around what was written); the levels above it are chains of single children.
-    const std::array<std::uint32_t, 3>& base = staging.rootBase();
-    for (unsigned level = kDepth; level > staging.rootLevel(); --level)
-      writer.chain(tree_coord::octant(base[0], base[1], base[2], level));
-    writer.node(staging.rootWord(), staging.rootLevel());
+    const NodeView root = staging.root();
+    for (unsigned level = kDepth; level > root.level; --level) writer.chain(root.corner.octant(level));
+    writer.node(root.word, root.level);
   }
   std::string out = std::string(kFirstLine) +
                     "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
@@ -165,7 +162,7 @@ void saveBt(const FastOctTree& tree, const std::string& path) {
 }
 
 FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name,
-                     const BtImportOptions& options) {
+                     const OctoMapImportOptions& options) {
   const std::string what_file = "pcl::fot::io: '" + name + "' is not a valid OctoMap .bt file";
   auto fail = [&](const std::string& what) { return FormatError(what_file + ": " + what); };
   // Every occupancy tree type (OcTree, ColorOcTree, OcTreeStamped, ...) writes the same .bt body, and
@@ -181,7 +178,7 @@ FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& nam
                   });
 }
 
-FastOctTree loadBt(const std::string& path, const BtImportOptions& options) {
+FastOctTree loadBt(const std::string& path, const OctoMapImportOptions& options) {
   std::string bytes;
   try {  // a .bt body is at least 2 bytes per 8 nodes, and the map grows no larger than the cap
     bytes = readFile(path, std::size_t(1) << 34);

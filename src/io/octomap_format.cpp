@@ -1,4 +1,4 @@
-#include "octomap_format.h"
+#include "io/octomap_format.h"
 
 #include <cmath>
 #include <cstdio>
@@ -83,17 +83,17 @@ Header readHeader(const char* bytes, std::size_t size, const char* first_line, c
   if (h.id == "1") h.id = "OcTree";  // OctoMap's legacy id
   if (h.id.empty()) throw fail("the header has no tree type (id)");
   if (!has_size) throw fail("the header has no size");
-  const std::string bad_grid = VoxelGrid::whyInvalid(h.resolution, 0.0, 0.0, 0.0);
+  const std::string bad_grid = CellGrid::whyInvalid(h.resolution, 0.0, 0.0, 0.0);
   if (!bad_grid.empty()) throw fail(bad_grid);
   h.body = at;
   return h;
 }
 
-FastOctTree placeStaging(const FastOctTree& staging, double res, const BtImportOptions& options) {
+FastOctTree placeStaging(const FastOctTree& staging, double res, const OctoMapImportOptions& options) {
   const std::int32_t origin_cells[3] = {cellsFromZero(options.origin[0], res, "x"),
                                         cellsFromZero(options.origin[1], res, "y"),
                                         cellsFromZero(options.origin[2], res, "z")};
-  FastOctTree tree(VoxelGrid(res, options.origin[0], options.origin[1], options.origin[2]));
+  FastOctTree tree(CellGrid(res, options.origin[0], options.origin[1], options.origin[2]));
   tree.setMaxMemoryBytes(options.max_pool_bytes);
   // Staging key + 0xAAAA = OctoMap key = key + 32768 + origin cells.
   const std::int64_t shift[3] = {0xAAAA - kCentre - std::int64_t(origin_cells[0]),

@@ -5,9 +5,9 @@
 #include <cstdint>
 #include <string>
 
-#include <pcl_fot/fast_oct_tree.h>
 #include <pcl_fot/io/fot_file.h>
-#include <pcl_fot/io/octomap_bt.h>
+#include <pcl_fot/io/octomap.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace pcl {
 namespace fot {
@@ -18,11 +18,9 @@ constexpr unsigned kDepth = 16;  // OctoMap's tree depth: 65536 cells per axis
 constexpr std::int32_t kCentre = 32768;
 
 // OctoMap's cells live in a staging tree whose tree coordinates are OctoMap's keys plus 0x2AAA0000, so that
-// its nodes are exactly OctoMap's: the level-16 cube at kStagingBase is OctoMap's root.
+// its nodes are exactly OctoMap's: the level-16 cube at kStagingRoot is OctoMap's root.
 constexpr std::uint32_t kStagingBase = 0x2AAA0000u;
-inline std::int32_t stagingKey(std::int32_t octomap_key) {
-  return tree_coord::toKey(kStagingBase + std::uint32_t(octomap_key));
-}
+const TreeCoord kStagingRoot(kStagingBase, kStagingBase, kStagingBase);
 
 /** The origin in whole cells from coordinate 0; throws std::invalid_argument if it is not on OctoMap's grid.
  */
@@ -45,7 +43,7 @@ struct Header {
 Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file);
 
 /** The map a staging tree holds, moved to the caller's origin, within the caller's memory cap. */
-FastOctTree placeStaging(const FastOctTree& staging, double res, const BtImportOptions& options);
+FastOctTree placeStaging(const FastOctTree& staging, double res, const OctoMapImportOptions& options);
 
 /**
  * Reads the tree after the header into a staging tree, with the reader make_reader(body, size, staging)
@@ -53,8 +51,9 @@ FastOctTree placeStaging(const FastOctTree& staging, double res, const BtImportO
  * nothing follows; and places the map. An origin off the grid fails before the work.
  */
 template <typename MakeReader>
-FastOctTree readBody(const char* bytes, std::size_t size, const Header& h, const BtImportOptions& options,
-                     const std::string& what_file, MakeReader&& make_reader) {
+FastOctTree readBody(const char* bytes, std::size_t size, const Header& h,
+                     const OctoMapImportOptions& options, const std::string& what_file,
+                     MakeReader&& make_reader) {
   cellsFromZero(options.origin[0], h.resolution, "x");
   cellsFromZero(options.origin[1], h.resolution, "y");
   cellsFromZero(options.origin[2], h.resolution, "z");
@@ -63,8 +62,7 @@ FastOctTree readBody(const char* bytes, std::size_t size, const Header& h, const
   auto reader = make_reader(reinterpret_cast<const unsigned char*>(bytes) + h.body, size - h.body, staging);
   std::uint64_t nodes = 0;
   if (h.size > 0) {
-    const std::int32_t root[3] = {0, 0, 0};
-    reader.node(0, root);
+    reader.node(0, kStagingRoot);
     nodes = reader.nodes();
   }
   if (nodes != h.size)

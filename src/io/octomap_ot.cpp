@@ -1,11 +1,11 @@
-#include <pcl_fot/io/octomap_ot.h>
+#include <pcl_fot/io/octomap.h>
 
 #include <cmath>
 #include <cstring>
 
 #include <pcl_fot/io/file_io.h>
 
-#include "octomap_format.h"
+#include "io/octomap_format.h"
 
 namespace pcl {
 namespace fot {
@@ -31,7 +31,7 @@ class OtReader {
            const std::string& what_file)
       : at_(body), end_(body + size), data_bytes_(data_bytes), staging_(staging), what_file_(what_file) {}
 
-  void node(unsigned depth, const std::int32_t corner[3]) {
+  void node(unsigned depth, const TreeCoord& corner) {
     if (std::size_t(end_ - at_) < data_bytes_ + 1) throw fail("the tree ends early: the file is truncated");
     float log_odds;
     std::memcpy(&log_odds, at_, sizeof log_odds);
@@ -41,20 +41,14 @@ class OtReader {
     const std::int32_t side = std::int32_t(1) << (kDepth - depth);
     if (children == 0) {  // a leaf: a voxel, or a pruned cube of them
       if (std::isnan(log_odds)) throw fail("a leaf's log-odds is not a number");
-      const Key lo{stagingKey(corner[0]), stagingKey(corner[1]), stagingKey(corner[2])};
+      const Key lo = corner.key();
       staging_.setBox(lo, Key{lo.x + side - 1, lo.y + side - 1, lo.z + side - 1},
                       log_odds >= 0.0f ? CellState::Occupied : CellState::Free);
       return;
     }
     if (depth == kDepth) throw fail("a voxel at the deepest level has children");
-    const std::int32_t half = side / 2;
-    for (unsigned o = 0; o < 8; ++o) {
-      if (!((children >> o) & 1u)) continue;
-      const std::int32_t child[3] = {corner[0] + std::int32_t(o & 1u) * half,
-                                     corner[1] + std::int32_t((o >> 1) & 1u) * half,
-                                     corner[2] + std::int32_t((o >> 2) & 1u) * half};
-      node(depth + 1, child);
-    }
+    for (unsigned o = 0; o < 8; ++o)
+      if ((children >> o) & 1u) node(depth + 1, corner.child(o, kDepth - depth - 1));
   }
 
   std::size_t left() const { return std::size_t(end_ - at_); }
@@ -73,7 +67,7 @@ class OtReader {
 }  // namespace
 
 FastOctTree decodeOt(const char* bytes, std::size_t size, const std::string& name,
-                     const BtImportOptions& options) {
+                     const OctoMapImportOptions& options) {
   const std::string what_file = "pcl::fot::io: '" + name + "' is not a valid OctoMap .ot file";
   auto fail = [&](const std::string& what) { return FormatError(what_file + ": " + what); };
   const Header h = readHeader(bytes, size, kFirstLine, what_file);
@@ -90,7 +84,7 @@ FastOctTree decodeOt(const char* bytes, std::size_t size, const std::string& nam
                   });
 }
 
-FastOctTree loadOt(const std::string& path, const BtImportOptions& options) {
+FastOctTree loadOt(const std::string& path, const OctoMapImportOptions& options) {
   std::string bytes;
   try {  // 5 bytes or more per node, and the map grows no larger than the cap
     bytes = readFile(path, std::size_t(1) << 34);

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include <pcl_fot/accessor.h>
 #include <pcl_fot/io/file_io.h>
+#include <pcl_fot/tree/accessor.h>
 
 namespace pcl {
 namespace fot {
@@ -46,7 +46,7 @@ std::vector<Cell> exportedCells(const FastOctTree& tree, const VoxelExportOption
                             " cells exceed the limit of " + std::to_string(options.max_cells));
   std::vector<Cell> cells;
   cells.reserve(std::size_t(total));
-  const VoxelGrid& grid = tree.getGrid();
+  const CellGrid& grid = tree.getGrid();
   auto collect = [&](CellState s) {
     tree.forEachCell(s, [&](const Key& k) {
       double x, y, z;
@@ -116,7 +116,7 @@ std::size_t saveVoxelMeshVTK(const FastOctTree& tree, const std::string& path,
   const std::vector<Cell> cells = exportedCells(tree, options, "saveVoxelMeshVTK");
   const Colors color(cells,
                      options.coloring == VoxelColoring::None ? VoxelColoring::Height : options.coloring);
-  const VoxelGrid& grid = tree.getGrid();
+  const CellGrid& grid = tree.getGrid();
   const double res = grid.resolution();
   // The 6 faces of a unit cube: the neighbour's offset and the corners, counter-clockwise seen from outside.
   struct Face {

@@ -2,9 +2,9 @@
 #include <iostream>
 
 #include <pcl/point_types.h>
-#include <pcl_fot/accessor.h>
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/tree/accessor.h>
 
 int main() {
   pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);

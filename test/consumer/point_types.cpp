@@ -7,10 +7,10 @@
 #include <pcl/point_types.h>
 #include <pcl/register_point_struct.h>
 #include <pcl/registration/icp.h>
-#include <pcl_fot/octree_point_cloud.h>
-#include <pcl_fot/registration/correspondence_rejection_psi.h>
-#include <pcl_fot/registration/transformation_validation_psi.h>
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/octree_point_cloud.h>
+#include <pcl_fot/pcl/transformation_validation_psi.h>
 
 struct EIGEN_ALIGN16 LidarPoint {
   PCL_ADD_POINT4D;
@@ -60,14 +60,14 @@ int main() {
   octree.addPointsFromInputCloud();
   expect(octree.getLeafCount() > 0 && octree.isVoxelOccupiedAtPoint((*sheet)[0]), "OctreePointCloud on it");
 
-  pcl::registration::TransformationValidationPsi<LidarPoint, pcl::PointNormal> mixed(0.05);
+  pcl::fot::registration::TransformationValidationPsi<LidarPoint, pcl::PointNormal> mixed(0.05);
   const double apart = mixed.validateTransformation(sheet, shifted, Eigen::Matrix4f::Identity());
   Eigen::Matrix4f back = Eigen::Matrix4f::Identity();
   back(0, 3) = 0.1f;
   const double together = mixed.validateTransformation(sheet, shifted, back);
   expect(together == 0.0 && apart > 0.0, "ψ with different source and target types");
 
-  pcl::registration::TransformationValidationPsi<LidarPoint, pcl::PointNormal, double> precise(0.05);
+  pcl::fot::registration::TransformationValidationPsi<LidarPoint, pcl::PointNormal, double> precise(0.05);
   expect(precise.validateTransformation(sheet, shifted, back.cast<double>()) == together &&
              precise.validateTransformation(sheet, shifted, Eigen::Matrix4d::Identity()) == apart,
          "ψ with double transformations");
@@ -75,7 +75,7 @@ int main() {
   pcl::IterativeClosestPoint<LidarPoint, LidarPoint> icp;
   pcl::PointCloud<LidarPoint>::Ptr moved(new pcl::PointCloud<LidarPoint>(*sheet));
   for (auto& p : *moved) p.x += 0.02f;
-  auto rejector = pcl::make_shared<pcl::registration::CorrespondenceRejectorPsi<LidarPoint>>(0.02, 1.0);
+  auto rejector = pcl::make_shared<pcl::fot::registration::CorrespondenceRejectorPsi<LidarPoint>>(0.02, 1.0);
   icp.setInputSource(moved);
   icp.setInputTarget(sheet);
   icp.setSearchMethodTarget(search);

@@ -7,9 +7,9 @@
 #include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
 #include <pcl/octree/octree_pointcloud_occupancy.h>
 
-#include <pcl_fot/fast_occ_mesh.h>
-#include <pcl_fot/fast_oct_tree.h>
-#include <pcl_fot/point_cloud_insertion.h>
+#include <pcl_fot/dense/fast_occ_mesh.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "bench_util.h"
 
@@ -22,7 +22,7 @@ using PclOccupancy = pcl::octree::OctreePointCloudOccupancy<pcl::PointXYZ>;
 /** The five structures of the experiment, built at one resolution. */
 struct Contenders {
   explicit Contenders(double res)
-      : fot(res), fot_plain(res), grid(pcl::fot::VoxelGrid(res)), pcl_octree(res), octomap_tree(res) {}
+      : fot(res), fot_plain(res), grid(pcl::fot::CellGrid(res)), pcl_octree(res), octomap_tree(res) {}
   pcl::fot::FastOctTree fot, fot_plain;
   pcl::fot::FastOccMesh grid;
   PclOccupancy pcl_octree;

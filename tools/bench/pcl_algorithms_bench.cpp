@@ -16,7 +16,7 @@
 #include <pcl/segmentation/region_growing.h>
 #include <pcl/surface/mls.h>
 
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
 
 #include "bench_util.h"
 

@@ -11,11 +11,11 @@
 #include <pcl/common/transforms.h>
 #include <nanoflann.hpp>
 
-#include <pcl_fot/distance_map.h>
 #include <pcl_fot/io/file_io.h>
-#include <pcl_fot/nearest_neighbor.h>
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/psi.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/psi/distance_map.h>
+#include <pcl_fot/psi/psi.h>
+#include <pcl_fot/search/nearest_cell_search.h>
 
 #include "bench_util.h"
 
@@ -34,7 +34,7 @@ struct MapPair {
   std::vector<Key> a, b;
 };
 
-std::vector<Key> occupiedKeys(const Cloud& cloud, const pcl::fot::VoxelGrid& grid) {
+std::vector<Key> occupiedKeys(const Cloud& cloud, const pcl::fot::CellGrid& grid) {
   pcl::fot::FastOctTree tree(grid);
   pcl::fot::insertPointCloud(tree, cloud);
   std::vector<Key> keys;
@@ -44,14 +44,14 @@ std::vector<Key> occupiedKeys(const Cloud& cloud, const pcl::fot::VoxelGrid& gri
 
 MapPair scanPair(const BenchScan& a, const BenchScan& b, double res, const Eigen::Affine3f& b_pose,
                  const std::string& label) {
-  const pcl::fot::VoxelGrid grid(res);
+  const pcl::fot::CellGrid grid(res);
   Cloud moved;
   pcl::transformPointCloud(*b.cloud, moved, b_pose);
   return {format("%s (%.2f m)", label.c_str(), res), res, occupiedKeys(*a.cloud, grid),
           occupiedKeys(moved, grid)};
 }
 
-pcl::fot::FastOctTree treeOf(const std::vector<Key>& keys, const pcl::fot::VoxelGrid& grid) {
+pcl::fot::FastOctTree treeOf(const std::vector<Key>& keys, const pcl::fot::CellGrid& grid) {
   pcl::fot::FastOctTree tree(grid);
   tree.insertKeys(keys.data(), keys.size());
   return tree;
@@ -101,7 +101,7 @@ struct DmapStorage {
 };
 
 PsiTimes timePsi(const MapPair& p, int tree_repeats, int dmap_repeats, DmapStorage& storage) {
-  const pcl::fot::VoxelGrid grid(p.res);
+  const pcl::fot::CellGrid grid(p.res);
   const pcl::fot::FastOctTree ta = treeOf(p.a, grid), tb = treeOf(p.b, grid);
   PsiTimes t;
   for (int r = 0; r < tree_repeats; ++r) {
@@ -233,7 +233,7 @@ std::string versusNanoflann(const std::vector<MapPair>& pairs, int repeats,
   double worst = 1e300;
   for (const MapPair& p : pairs) {
     std::fprintf(stderr, "  psi: against nanoflann, %s\n", p.name.c_str());
-    const pcl::fot::VoxelGrid grid(p.res);
+    const pcl::fot::CellGrid grid(p.res);
     const pcl::fot::FastOctTree ta = treeOf(p.a, grid), tb = treeOf(p.b, grid);
     const Centres ca(p.a), cb(p.b);
     std::vector<double> tree, threaded, nano;

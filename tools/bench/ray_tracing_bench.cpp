@@ -7,10 +7,10 @@
 #include <octomap/OcTree.h>
 #include <pcl/common/transforms.h>
 
-#include <pcl_fot/fast_occ_mesh.h>
-#include <pcl_fot/fast_oct_tree.h>
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/scan_insertion.h>
+#include <pcl_fot/dense/fast_occ_mesh.h>
+#include <pcl_fot/mapping/scan_insertion.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "bench_util.h"
 
@@ -43,7 +43,7 @@ std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats) {
         octomap_scan.push_back(p.x, p.y, p.z);
     const float* xyz = &in_map[0].x;
 
-    FastOccMesh grid{pcl::fot::VoxelGrid(res)};
+    FastOccMesh grid{pcl::fot::CellGrid(res)};
     ScanOptions plain;
     plain.line_burst = false;
     std::vector<double> t_fot, t_plain, t_grid, t_om;

@@ -15,9 +15,9 @@
 #include <flann/flann.hpp>
 #include <nanoflann.hpp>
 
-#include <pcl_fot/nearest_neighbor.h>
-#include <pcl_fot/point_cloud_insertion.h>
-#include <pcl_fot/search/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/cloud_insertion.h>
+#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/search/nearest_cell_search.h>
 
 #include "bench_util.h"
 
@@ -196,7 +196,7 @@ std::string pointLevel(const BenchScan& target, const BenchScan& source, double 
 /** The paper's voxel-level search: nearest occupied cell in the Manhattan metric, against nanoflann L1. */
 std::string voxelLevel(const BenchScan& target, const BenchScan& source, double res, int repeats,
                        std::vector<std::string>& verdicts) {
-  const pcl::fot::VoxelGrid grid(res);
+  const pcl::fot::CellGrid grid(res);
   pcl::fot::FastOctTree target_map(grid), source_map(grid);
   pcl::fot::insertPointCloud(target_map, *target.cloud);
   pcl::fot::insertPointCloud(source_map, *source.cloud);

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace pcl {
 namespace fot {

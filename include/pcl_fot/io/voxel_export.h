@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <string>
 
-#include <pcl_fot/fast_oct_tree.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace pcl {
 namespace fot {

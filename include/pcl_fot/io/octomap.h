@@ -1,0 +1,66 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include <pcl_fot/io/fot_file.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+namespace io {
+
+/**
+ * OctoMap's files, read and written without the OctoMap library: the binary .bt format (maximum-likelihood
+ * occupancy) and the full .ot format. OctoMap's grid has its cell boundaries on multiples of the resolution
+ * and 65536 cells per axis centred on coordinate 0: key K = floor(c / res) + 32768. A map is representable
+ * when its origin lies on that grid (a whole number of cells from 0 on each axis) and its known cells lie
+ * within that cube; the free and occupied cells are then carried over exactly.
+ */
+
+struct OctoMapImportOptions {
+  /** Origin of the map to build; it must lie on OctoMap's grid (a whole number of cells from 0). */
+  double origin[3] = {0.0, 0.0, 0.0};
+  /** The map may not grow beyond this: a hostile file gets MemoryLimitError, not all the memory. */
+  std::size_t max_pool_bytes = kDefaultMaxPoolBytes;
+};
+
+/**
+ * The .bt bytes of a tree. OctoMap's log-odds are not carried: a .bt holds maximum-likelihood states only,
+ * as this map does. Throws std::invalid_argument, saying why, if the map is not representable.
+ */
+std::string encodeBt(const FastOctTree& tree);
+
+/** Writes a .bt file atomically. Throws as encodeBt, and std::runtime_error on I/O errors. */
+void saveBt(const FastOctTree& tree, const std::string& path);
+
+/**
+ * The map in .bt bytes, with OctoMap's cells: its resolution from the header, the origin from the options.
+ * Every occupancy tree type (OcTree, ColorOcTree, OcTreeStamped) writes the same .bt body under its own id;
+ * the reader takes any, as OctoMap does. Throws FormatError, prefixed with `name`, for a malformed file (bad
+ * header, truncated or excess body, a node count that disagrees with the header), std::invalid_argument for
+ * an origin off OctoMap's grid, and MemoryLimitError beyond the cap.
+ */
+FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name = "<memory>",
+                     const OctoMapImportOptions& options = {});
+
+/** Reads a .bt file; throws as decodeBt, and std::runtime_error when it cannot be read. */
+FastOctTree loadBt(const std::string& path, const OctoMapImportOptions& options = {});
+
+/**
+ * The map in .ot bytes, from the trees OcTree, OcTreeStamped and ColorOcTree (its colours are dropped).
+ * Every leaf becomes free or occupied as OctoMap's isNodeOccupied says with its default threshold,
+ * probability 0.5: occupied when its log-odds is at least 0. Throws FormatError, prefixed with `name`, for
+ * a malformed file (bad header, another tree type, truncated or excess body, a log-odds that is not a
+ * number, a node count that disagrees with the header), std::invalid_argument for an origin off OctoMap's
+ * grid, and MemoryLimitError beyond the cap.
+ */
+FastOctTree decodeOt(const char* bytes, std::size_t size, const std::string& name = "<memory>",
+                     const OctoMapImportOptions& options = {});
+
+/** Reads a .ot file; throws as decodeOt, and std::runtime_error when it cannot be read. */
+FastOctTree loadOt(const std::string& path, const OctoMapImportOptions& options = {});
+
+}  // namespace io
+}  // namespace fot
+}  // namespace pcl

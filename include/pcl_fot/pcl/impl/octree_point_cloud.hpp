@@ -1,0 +1,666 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <utility>
+
+#include <pcl/common/common.h>
+#include <pcl/common/point_tests.h>
+#include <pcl/console/print.h>
+
+#include <pcl_fot/detail/bits.h>
+#include <pcl_fot/mapping/ray_traversal.h>
+#include <pcl_fot/pcl/octree_point_cloud.h>
+#include <pcl_fot/tree/accessor.h>
+
+namespace pcl {
+namespace fot {
+namespace detail {
+
+/** The deepest box the adapter follows PCL to: 2^29 cells per axis keeps tree keys in range. */
+constexpr uindex_t kMaxPclDepth = 29;
+
+/** Moves bit i of v to bit 3i, for v below 2^21. */
+inline std::uint64_t spreadBits3(std::uint64_t v) {
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  return (v | v << 2) & 0x1249249249249249ULL;
+}
+
+/**
+ * A key's place in pcl::octree's depth-first order, where the child index at each level is x·4 + y·2 + z:
+ * the key's bits interleaved, x above y above z.
+ */
+struct PclOrderCode {
+  std::uint64_t high, low;  // bits 28..14 of each axis, then bits 13..0
+  explicit PclOrderCode(const octree::OctreeKey& k)
+      : high(spreadBits3(k.x >> 14) << 2 | spreadBits3(k.y >> 14) << 1 | spreadBits3(k.z >> 14)),
+        low(spreadBits3(k.x & 0x3fff) << 2 | spreadBits3(k.y & 0x3fff) << 1 | spreadBits3(k.z & 0x3fff)) {}
+  bool operator<(const PclOrderCode& o) const { return high < o.high || (high == o.high && low < o.low); }
+};
+
+}  // namespace detail
+
+template <typename PointT>
+OctreePointCloud<PointT>::OctreePointCloud(const double resolution_arg)
+    : resolution_(resolution_arg), tree_(resolution_arg) {
+  max_[0] = max_[1] = max_[2] = resolution_arg;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::setInputCloud(const PointCloudConstPtr& cloud_arg,
+                                             const IndicesConstPtr& indices_arg) {
+  input_ = cloud_arg;
+  indices_ = indices_arg;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
+  if (getLeafCount() != 0) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
+    return;
+  }
+  const std::string why = CellGrid::whyInvalid(resolution_arg, 0.0, 0.0, 0.0);
+  if (!why.empty()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::setResolution] Refused: %s.\n", why.c_str());
+    return;
+  }
+  resolution_ = resolution_arg;
+  tree_ = FastOctTree(resolution_arg);
+  getKeyBitSize();
+}
+
+template <typename PointT>
+octree::OctreeKey OctreePointCloud<PointT>::pclKey(double x, double y, double z) const {
+  // A point just inside the box's far face can round to one voxel past it; pcl::octree asserts there.
+  const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << depth_) - 1);
+  return octree::OctreeKey(std::min(static_cast<uindex_t>((x - min_[0]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((y - min_[1]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((z - min_[2]) / resolution_), last));
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const {
+  point.x = static_cast<float>((static_cast<double>(key.x) + 0.5f) * resolution_ + min_[0]);
+  point.y = static_cast<float>((static_cast<double>(key.y) + 0.5f) * resolution_ + min_[1]);
+  point.z = static_cast<float>((static_cast<double>(key.z) + 0.5f) * resolution_ + min_[2]);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::getKeyBitSize() {
+  // PCL's arithmetic, step for step, so that the box comes out bit for bit the same.
+  const float min_value = std::numeric_limits<float>::epsilon();
+  uindex_t max_voxels = 2;
+  for (int a = 0; a < 3; ++a)
+    max_voxels =
+        std::max(max_voxels, static_cast<uindex_t>(std::ceil((max_[a] - min_[a] - min_value) / resolution_)));
+  depth_ = std::max<uindex_t>(
+      std::min<uindex_t>(octree::OctreeKey::maxDepth, std::ceil(std::log2(max_voxels) - min_value)), 0);
+  const double side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_;
+  for (int a = 0; a < 3; ++a) {
+    if (getLeafCount() == 0) {
+      const double oversize = (side - (max_[a] - min_[a])) / 2.0;
+      if (oversize > min_value) {
+        min_[a] -= oversize;
+        max_[a] += oversize;
+      }
+    } else {
+      max_[a] = min_[a] + side;
+    }
+  }
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, double z) {
+  const float min_value = std::numeric_limits<float>::epsilon();
+  const double p[3] = {x, y, z};
+  // A point that does not fit leaves the box as it was, not grown part of the way.
+  const auto box = std::make_tuple(std::array<double, 3>{min_[0], min_[1], min_[2]},
+                                   std::array<double, 3>{max_[0], max_[1], max_[2]}, depth_, offset_);
+  const std::size_t phantoms = phantoms_.size();
+  while (true) {
+    bool lower[3], upper[3];
+    for (int a = 0; a < 3; ++a) {
+      lower[a] = p[a] < min_[a];
+      upper[a] = p[a] >= max_[a];
+    }
+    const bool violated = lower[0] || lower[1] || lower[2] || upper[0] || upper[1] || upper[2];
+    if (bounding_box_defined_ && !violated) return true;
+    if (!bounding_box_defined_) {
+      // The first point: a box of ±res/2 around it.
+      for (int a = 0; a < 3; ++a) {
+        min_[a] = p[a] - resolution_ / 2;
+        max_[a] = p[a] + resolution_ / 2;
+      }
+      getKeyBitSize();
+      offset_ = {0, 0, 0};
+      phantoms_.clear();
+      bounding_box_defined_ = true;
+      continue;
+    }
+    if (depth_ >= detail::kMaxPclDepth) {
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud] The point (%g, %g, %g) would grow the octree beyond 2^%u cells per "
+          "axis; it is not added.\n",
+          x, y, z, detail::kMaxPclDepth);
+      const auto& [lo, hi, depth, offset] = box;
+      std::copy(lo.begin(), lo.end(), min_);
+      std::copy(hi.begin(), hi.end(), max_);
+      depth_ = depth;
+      offset_ = offset;
+      phantoms_.resize(phantoms);
+      return false;
+    }
+    // A new root: the box doubles, downwards on every axis the point does not exceed upwards.
+    if (getLeafCount() == 0)  // PCL keeps the empty old root as a branch
+      phantoms_.push_back({Key{offset_[0], offset_[1], offset_[2]}, depth_});
+    const double side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_;
+    for (int a = 0; a < 3; ++a)
+      if (!upper[a]) {
+        min_[a] -= side;
+        offset_[a] -= std::int32_t(1) << depth_;
+      }
+    ++depth_;
+    const double new_side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_ - min_value;
+    for (int a = 0; a < 3; ++a) max_[a] = min_[a] + new_side;
+  }
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::setOccupiedVoxelAtPoint(const PointT& point_arg) {
+  if (!isFinite(point_arg)) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::setOccupiedVoxelAtPoint] The point is not finite; it is not added.\n");
+    return;
+  }
+  if (!adoptBoundingBoxToPoint(point_arg.x, point_arg.y, point_arg.z)) return;
+  tree_.setCell(pclKeyToTreeKey(pclKey(point_arg.x, point_arg.y, point_arg.z)), CellState::Occupied);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::setOccupiedVoxelsAtPointsFromCloud(PointCloudPtr cloud_arg) {
+  for (const auto& p : *cloud_arg)
+    if (isFinite(p)) setOccupiedVoxelAtPoint(p);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::addPointsFromInputCloud() {
+  if (!input_) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] No input cloud.\n");
+    return;
+  }
+  if (indices_) {
+    for (const auto index : *indices_) {
+      if (index < 0 || static_cast<std::size_t>(index) >= input_->size()) {
+        PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] Index %d is outside the cloud.\n",
+                  index);
+        continue;
+      }
+      if (isFinite((*input_)[index])) setOccupiedVoxelAtPoint((*input_)[index]);
+    }
+    return;
+  }
+  for (const auto& p : *input_)
+    if (isFinite(p)) setOccupiedVoxelAtPoint(p);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg) {
+  if (!input_ || point_idx_arg >= input_->size()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::addPointFromCloud] Index %zu is outside the input cloud.\n",
+              static_cast<std::size_t>(point_idx_arg));
+    return;
+  }
+  setOccupiedVoxelAtPoint((*input_)[point_idx_arg]);
+  if (indices_arg) indices_arg->push_back(static_cast<index_t>(point_idx_arg));
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg) {
+  if (cloud_arg != input_) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::addPointToCloud] The cloud must be the input cloud.\n");
+    return;
+  }
+  cloud_arg->push_back(point_arg);
+  setOccupiedVoxelAtPoint(point_arg);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg,
+                                               IndicesPtr indices_arg) {
+  if (cloud_arg != input_ || indices_arg != indices_) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::addPointToCloud] The cloud and indices must be the input's.\n");
+    return;
+  }
+  cloud_arg->push_back(point_arg);
+  indices_arg->push_back(static_cast<index_t>(cloud_arg->size()) - 1);
+  setOccupiedVoxelAtPoint(point_arg);
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const PointT& point_arg) const {
+  if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return false;
+  return tree_.getCell(pclKeyToTreeKey(pclKey(point_arg.x, point_arg.y, point_arg.z))) == CellState::Occupied;
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg,
+                                                      const double point_z_arg) const {
+  PointT point;  // through PointT's floats, as PCL does
+  point.x = point_x_arg;
+  point.y = point_y_arg;
+  point.z = point_z_arg;
+  return isVoxelOccupiedAtPoint(point);
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const index_t& point_idx_arg) const {
+  if (!input_ || point_idx_arg < 0 || static_cast<std::size_t>(point_idx_arg) >= input_->size()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::isVoxelOccupiedAtPoint] Index %d is not in the input cloud.\n",
+              point_idx_arg);
+    return false;
+  }
+  return isVoxelOccupiedAtPoint((*input_)[point_idx_arg]);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::deleteVoxelAtPoint(const PointT& point_arg) {
+  if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return;
+  const octree::OctreeKey key = pclKey(point_arg.x, point_arg.y, point_arg.z);
+  removeLeaf(key.x, key.y, key.z);
+}
+
+template <typename PointT>
+bool OctreePointCloud<PointT>::existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
+  if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return false;
+  return tree_.getCell(pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))) ==
+         CellState::Occupied;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
+  if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return;
+  const Key target = pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg));
+  tree_.eraseCell(target);
+  // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
+  // so the smallest goes first, and each larger one only once nothing is left inside it.
+  std::sort(phantoms_.begin(), phantoms_.end(),
+            [](const Phantom& a, const Phantom& b) { return a.level < b.level; });
+  while (!phantoms_.empty()) {
+    const Phantom& ph = phantoms_.front();
+    const std::int32_t last = std::int32_t((std::int64_t(1) << ph.level) - 1);
+    const Key hi{ph.min.x + last, ph.min.y + last, ph.min.z + last};
+    const bool on_path = target.x >= ph.min.x && target.x <= hi.x && target.y >= ph.min.y &&
+                         target.y <= hi.y && target.z >= ph.min.z && target.z <= hi.z;
+    bool holds_voxels = false;
+    if (on_path)
+      tree_.forEachRegionInBox(ph.min, hi, [&](const Region& r) {
+        holds_voxels = r.state == CellState::Occupied;
+        return !holds_voxels;
+      });
+    if (!on_path || holds_voxels) break;
+    phantoms_.erase(phantoms_.begin());
+  }
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::deleteVoxelAtPoint(const index_t& point_idx_arg) {
+  if (!input_ || point_idx_arg < 0 || static_cast<std::size_t>(point_idx_arg) >= input_->size()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::deleteVoxelAtPoint] Index %d is not in the input cloud.\n",
+              point_idx_arg);
+    return;
+  }
+  deleteVoxelAtPoint((*input_)[point_idx_arg]);
+}
+
+template <typename PointT>
+std::vector<octree::OctreeKey> OctreePointCloud<PointT>::sortedLeafKeys() const {
+  std::vector<std::pair<detail::PclOrderCode, octree::OctreeKey>> coded;
+  coded.reserve(getLeafCount());
+  tree_.forEachCell(CellState::Occupied, [&](const Key& k) {
+    const octree::OctreeKey key(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]),
+                                uindex_t(k.z - offset_[2]));
+    coded.emplace_back(detail::PclOrderCode(key), key);
+  });
+  std::sort(coded.begin(), coded.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<octree::OctreeKey> keys;
+  keys.reserve(coded.size());
+  for (const auto& c : coded) keys.push_back(c.second);
+  return keys;
+}
+
+template <typename PointT>
+uindex_t OctreePointCloud<PointT>::getOccupiedVoxelCenters(AlignedPointTVector& voxel_center_list_arg) const {
+  voxel_center_list_arg.clear();
+  for (const auto& key : sortedLeafKeys()) {
+    PointT center;
+    pclKeyToCenter(key, center);
+    voxel_center_list_arg.push_back(center);
+  }
+  return static_cast<uindex_t>(voxel_center_list_arg.size());
+}
+
+template <typename PointT>
+std::vector<typename OctreePointCloud<PointT>::Node> OctreePointCloud<PointT>::depthFirstNodes(
+    uindex_t max_depth) const {
+  if (max_depth == 0 || max_depth > depth_) max_depth = depth_;
+  // The nodes come from markers, in depth-first order: each voxel, and each empty old root that PCL keeps.
+  // Each marker brings the ancestors the previous markers did not.
+  struct Marker {
+    octree::OctreeKey corner;  // the cube's first voxel
+    uindex_t depth;
+  };
+  std::vector<Marker> markers;
+  const std::vector<octree::OctreeKey> keys = sortedLeafKeys();
+  markers.reserve(keys.size() + phantoms_.size());
+  for (const auto& k : keys) markers.push_back({k, depth_});
+  for (const Phantom& ph : phantoms_)
+    markers.push_back({octree::OctreeKey(uindex_t(ph.min.x - offset_[0]), uindex_t(ph.min.y - offset_[1]),
+                                         uindex_t(ph.min.z - offset_[2])),
+                       depth_ - ph.level});
+  // The voxels are in order; the old roots merge in, a cube before what it contains from the same corner.
+  const auto before = [](const Marker& a, const Marker& b) {
+    const detail::PclOrderCode ca(a.corner), cb(b.corner);
+    return ca < cb || (!(cb < ca) && a.depth < b.depth);
+  };
+  const auto voxels_end = markers.begin() + std::ptrdiff_t(keys.size());
+  std::sort(voxels_end, markers.end(), before);
+  std::inplace_merge(markers.begin(), voxels_end, markers.end(), before);
+
+  std::vector<Node> nodes{{octree::OctreeKey(0, 0, 0), 0, 0, false}};
+  nodes.reserve(2 * markers.size() + 1);
+  std::vector<std::size_t> path{0};        // the indices of the last node listed at each depth
+  octree::OctreeKey path_corner(0, 0, 0);  // a voxel in the deepest node on the path
+  for (const Marker& m : markers) {
+    // The path holds m's ancestors down to where their corners part.
+    const std::uint32_t parted =
+        (m.corner.x ^ path_corner.x) | (m.corner.y ^ path_corner.y) | (m.corner.z ^ path_corner.z);
+    const uindex_t shared = depth_ - (parted == 0 ? 0u : 1u + uindex_t(detail::highestBit(parted)));
+    const uindex_t known = std::min({uindex_t(path.size() - 1), shared, m.depth});
+    if (known == m.depth) continue;
+    path.resize(known + 1);
+    for (uindex_t depth = known + 1; depth <= m.depth; ++depth) {
+      const uindex_t shift = depth_ - depth;
+      const octree::OctreeKey key(m.corner.x >> shift, m.corner.y >> shift, m.corner.z >> shift);
+      nodes[path.back()].children |= std::uint8_t(1u << ((key.x & 1) << 2 | (key.y & 1) << 1 | (key.z & 1)));
+      path.push_back(nodes.size());
+      nodes.push_back({key, depth, 0, depth == depth_});
+    }
+    path_corner = m.corner;
+  }
+  // Cut below max_depth only now: the nodes there keep their children's bits, as in PCL.
+  if (max_depth < depth_)
+    nodes.erase(
+        std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth > max_depth; }),
+        nodes.end());
+  return nodes;
+}
+
+template <typename PointT>
+std::size_t OctreePointCloud<PointT>::getBranchCount() const {
+  const std::vector<Node> nodes = depthFirstNodes(0);
+  return std::size_t(std::count_if(nodes.begin(), nodes.end(), [](const Node& n) { return !n.leaf; }));
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::deleteTree() {
+  min_[0] = min_[1] = min_[2] = max_[0] = max_[1] = max_[2] = 0;
+  bounding_box_defined_ = false;
+  tree_.clear();
+  phantoms_.clear();
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::defineBoundingBox() {
+  if (!input_) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] No input cloud.\n");
+    return;
+  }
+  PointT lo, hi;
+  pcl::getMinMax3D(*input_, lo, hi);
+  const float min_value = std::numeric_limits<float>::epsilon() * 512.0f;
+  defineBoundingBox(lo.x, lo.y, lo.z, hi.x + min_value, hi.y + min_value, hi.z + min_value);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::defineBoundingBox(const double min_x_arg, const double min_y_arg,
+                                                 const double min_z_arg, const double max_x_arg,
+                                                 const double max_y_arg, const double max_z_arg) {
+  if (getLeafCount() != 0) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The octree must be empty to define its box.\n");
+    return;
+  }
+  const double in[6] = {min_x_arg, min_y_arg, min_z_arg, max_x_arg, max_y_arg, max_z_arg};
+  for (double v : in)
+    if (!std::isfinite(v)) {
+      PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] The box must be finite.\n");
+      return;
+    }
+  const double saved_min[3] = {min_[0], min_[1], min_[2]}, saved_max[3] = {max_[0], max_[1], max_[2]};
+  const uindex_t saved_depth = depth_;
+  min_[0] = std::min(min_x_arg, max_x_arg);
+  min_[1] = std::min(min_y_arg, max_y_arg);
+  min_[2] = std::min(min_z_arg, max_z_arg);
+  max_[0] = std::max(min_x_arg, max_x_arg);
+  max_[1] = std::max(min_y_arg, max_y_arg);
+  max_[2] = std::max(min_z_arg, max_z_arg);
+  getKeyBitSize();
+  if (depth_ > detail::kMaxPclDepth) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The box spans more than 2^%u cells per axis.\n",
+        detail::kMaxPclDepth);
+    std::copy(saved_min, saved_min + 3, min_);
+    std::copy(saved_max, saved_max + 3, max_);
+    depth_ = saved_depth;
+    return;
+  }
+  offset_ = {0, 0, 0};
+  phantoms_.clear();
+  bounding_box_defined_ = true;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::defineBoundingBox(const double max_x_arg, const double max_y_arg,
+                                                 const double max_z_arg) {
+  defineBoundingBox(std::min(0.0, max_x_arg), std::min(0.0, max_y_arg), std::min(0.0, max_z_arg),
+                    std::max(0.0, max_x_arg), std::max(0.0, max_y_arg), std::max(0.0, max_z_arg));
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::defineBoundingBox(const double cubeLen_arg) {
+  defineBoundingBox(cubeLen_arg, cubeLen_arg, cubeLen_arg);
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::getBoundingBox(double& min_x_arg, double& min_y_arg, double& min_z_arg,
+                                              double& max_x_arg, double& max_y_arg, double& max_z_arg) const {
+  min_x_arg = min_[0];
+  min_y_arg = min_[1];
+  min_z_arg = min_[2];
+  max_x_arg = max_[0];
+  max_y_arg = max_[1];
+  max_z_arg = max_[2];
+}
+
+template <typename PointT>
+double OctreePointCloud<PointT>::getVoxelSquaredSideLen(uindex_t tree_depth_arg) const {
+  const double side = std::ldexp(resolution_, int(depth_) - int(tree_depth_arg));
+  return side * side;
+}
+
+template <typename PointT>
+void OctreePointCloud<PointT>::getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt,
+                                              Eigen::Vector3f& max_pt) const {
+  const octree::OctreeKey& key = iterator.getCurrentOctreeKey();
+  const double side = std::ldexp(resolution_, int(depth_) - int(iterator.getCurrentOctreeDepth()));
+  const uindex_t k[3] = {key.x, key.y, key.z};
+  for (int a = 0; a < 3; ++a) {
+    min_pt(a) = static_cast<float>(static_cast<double>(k[a]) * side + min_[a]);
+    max_pt(a) = static_cast<float>(static_cast<double>(k[a] + 1) * side + min_[a]);
+  }
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::begin(
+    uindex_t max_depth_arg) const {
+  return NodeIterator(std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::breadth_begin(
+    uindex_t max_depth_arg) const {
+  std::vector<Node> nodes = depthFirstNodes(max_depth_arg);
+  // Depth-first order restricted to one depth is that depth's breadth-first order.
+  std::stable_sort(nodes.begin(), nodes.end(),
+                   [](const Node& a, const Node& b) { return a.depth < b.depth; });
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::fixed_depth_begin(
+    uindex_t fixed_depth_arg) const {
+  if (fixed_depth_arg > depth_) {
+    PCL_WARN(
+        "[pcl::fot::OctreePointCloud::fixed_depth_begin] Depth %u is deeper than the octree (depth %u).\n",
+        fixed_depth_arg, depth_);
+    return end();
+  }
+  std::vector<Node> nodes = depthFirstNodes(fixed_depth_arg);
+  nodes.erase(
+      std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth != fixed_depth_arg; }),
+      nodes.end());
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+}
+
+template <typename PointT>
+typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::leaf_depth_begin(
+    uindex_t max_depth_arg) const {
+  if (max_depth_arg != 0 && max_depth_arg < depth_) return end();
+  std::vector<Node> nodes;
+  nodes.reserve(getLeafCount());
+  for (const auto& key : sortedLeafKeys()) nodes.push_back({key, depth_, 0, true});
+  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+}
+
+template <typename PointT>
+uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
+    const Eigen::Vector3f& origin, const Eigen::Vector3f& end, AlignedPointTVector& voxel_center_list,
+    float precision) {
+  // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
+  const float step_size = static_cast<float>(resolution_) * precision;
+  if (!(end - origin).allFinite() || !(step_size > 0.0f) || !std::isfinite(step_size)) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] The segment must "
+        "be finite and the precision positive.\n");
+    return static_cast<uindex_t>(voxel_center_list.size());
+  }
+  Eigen::Vector3f direction = end - origin;
+  const float norm = direction.norm();
+  direction.normalize();
+  const double nsteps = std::max(1.0, std::floor(double(norm / step_size)));
+  octree::OctreeKey prev_key;
+  bool have_prev = false;
+  auto add = [&](const Eigen::Vector3f& p) {
+    if (!isPointWithinBoundingBox(p.x(), p.y(), p.z())) return;
+    const octree::OctreeKey key = pclKey(p.x(), p.y(), p.z());
+    if (have_prev && key == prev_key) return;
+    prev_key = key;
+    have_prev = true;
+    PointT center;
+    pclKeyToCenter(key, center);
+    voxel_center_list.push_back(center);
+  };
+  // Only the steps near the part of the segment inside the box can add a voxel: a far end costs nothing.
+  double t_in = 0.0, t_out = norm;
+  for (int a = 0; a < 3; ++a) {
+    const double o = origin[a], d = direction[a];
+    if (d == 0.0) {
+      if (o < min_[a] || o >= max_[a]) t_in = t_out + 1.0;
+      continue;
+    }
+    double t0 = (min_[a] - o) / d, t1 = (max_[a] - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (bounding_box_defined_ && t_in <= t_out) {
+    // A margin for the float rounding of the samples, which grows with their coordinates.
+    const double slack = 2.0 + (double(norm) + origin.cwiseAbs().sum()) * 1e-6 / step_size;
+    const double first = std::max(0.0, std::floor(t_in / step_size - slack));
+    const double last = std::min(nsteps, std::ceil(t_out / step_size + slack));
+    if (last - first > 0x1p32 || last > 0x1p53) {
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] Refused: %g steps "
+          "at this precision.\n",
+          last - first);
+      return static_cast<uindex_t>(voxel_center_list.size());
+    }
+    for (auto i = std::uint64_t(first); i < std::uint64_t(last); ++i)
+      add(origin + (direction * step_size * static_cast<float>(i)));
+  }
+  add(end);
+  return static_cast<uindex_t>(voxel_center_list.size());
+}
+
+template <typename PointT>
+uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f origin,
+                                                              Eigen::Vector3f direction,
+                                                              AlignedPointTVector& voxel_center_list,
+                                                              uindex_t max_voxel_count) const {
+  voxel_center_list.clear();
+  const double norm = direction.cast<double>().norm();
+  if (!bounding_box_defined_ || !(norm > 0.0) || !std::isfinite(norm) || !origin.allFinite()) return 0;
+  // Clip the ray to the box (slab test), then walk its cells from the entry on.
+  double t_in = 0.0, t_out = std::numeric_limits<double>::infinity();
+  double dir[3];
+  for (int a = 0; a < 3; ++a) {
+    dir[a] = double(direction[a]) / norm;
+    if (dir[a] == 0.0) {
+      if (origin[a] < min_[a] || origin[a] >= max_[a]) return 0;
+      continue;
+    }
+    double t0 = (min_[a] - origin[a]) / dir[a], t1 = (max_[a] - origin[a]) / dir[a];
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (t_in >= t_out) return 0;
+  const std::int64_t cells = std::int64_t(1) << depth_;
+  std::int32_t start[3];
+  double rel[3];
+  for (int a = 0; a < 3; ++a) {
+    const double entry = origin[a] + t_in * dir[a];
+    const double k = std::floor((entry - min_[a]) / resolution_);
+    start[a] = std::int32_t(std::min<double>(std::max<double>(k, 0.0), double(cells - 1)));
+    rel[a] = double(origin[a]) - min_[a];
+  }
+  const CellGrid box_grid(resolution_);  // PCL's frame: keys counted from the box's lower corner
+  RayWalker walker(box_grid, Key{start[0], start[1], start[2]}, rel, dir);
+  ConstAccessor cells_of(tree_);
+  for (std::int64_t budget = 3 * cells + 3; budget > 0; --budget) {
+    const Key k = walker.key();
+    if (k.x < 0 || k.y < 0 || k.z < 0 || k.x >= cells || k.y >= cells || k.z >= cells) break;
+    const octree::OctreeKey pk(uindex_t(k.x), uindex_t(k.y), uindex_t(k.z));
+    if (cells_of.getCell(pclKeyToTreeKey(pk)) == CellState::Occupied) {
+      PointT center;
+      pclKeyToCenter(pk, center);
+      voxel_center_list.push_back(center);
+      if (max_voxel_count != 0 && voxel_center_list.size() >= max_voxel_count) break;
+    }
+    walker.step();
+  }
+  return static_cast<uindex_t>(voxel_center_list.size());
+}
+
+}  // namespace fot
+}  // namespace pcl
+
+#define PCL_INSTANTIATE_OctreePointCloud(T) template class PCL_EXPORTS pcl::fot::OctreePointCloud<T>;

@@ -1,0 +1,119 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <pcl_fot/search/nearest_cell_search.h>
+#include <pcl_fot/tree/accessor.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+/**
+ * Exact nearest-neighbour queries on a point set: a FastOctTree of the points' cells, plus a compact table
+ * from each occupied cell to its points. The tree walk (see NeighbourWalk) visits cells nearest first and
+ * prunes by cell boxes; the table lists each cell's points contiguously, found by the cell's rank in the
+ * tree's Morton order. A crowded cell's points are split further into boxes of the points themselves.
+ *
+ * Distances are those PCL's searches report: squared Euclidean, (dx² + dy²) + dz² in float, or Manhattan,
+ * (|dx| + |dy|) + |dz|. Results are exact, nearest first, and ties go to the smaller point index.
+ * Const queries are safe from many threads at once; each thread reuses its own path from query to query.
+ */
+class PointIndex {
+ public:
+  /**
+   * An index that picks its cell edge at each build: the finest at which the occupied cells hold 8 points
+   * on average, where k-NN and radius searches run about fastest (doc/benchmarks.md). It counts cells on up
+   * to 65,536 of the points, evenly spaced in the input, and estimates beyond; if the tree then holds fewer
+   * than 4 points per cell, it takes the edge from the tree's exact counts and inserts the points again.
+   */
+  PointIndex();
+  /**
+   * A fixed cell edge. Throws std::invalid_argument for one CellGrid refuses (see CellGrid::whyInvalid).
+   */
+  explicit PointIndex(double resolution);
+
+  /**
+   * Indexes the points at `xyz` (point i's x, y, z at byte offset i * stride_bytes), or only those whose
+   * indices `subset` lists. Points that are not finite are left out.
+   */
+  void build(const float* xyz, std::size_t count, std::size_t stride_bytes,
+             const std::int32_t* subset = nullptr, std::size_t subset_size = 0);
+
+  /** Points indexed: the finite ones of those given to build. */
+  std::size_t size() const { return index_.size(); }
+  /** The index, as given to build, of one point indexed; -1 if none is. */
+  std::int32_t anyPoint() const { return !index_.empty() ? index_.front() : -1; }
+  /** The cell edge: the one given, or the one the last build picked (0.01 m before the first). */
+  double resolution() const { return resolution_; }
+  bool automatic() const { return automatic_; }
+  const FastOctTree& tree() const { return tree_; }
+
+  /**
+   * The k nearest points to q, nearest first: their indices (as given to build) and distances. Returns how
+   * many; 0 for a query that is not finite.
+   */
+  std::size_t nearestK(const float q[3], std::size_t k, Metric metric, std::vector<std::int32_t>& indices,
+                       std::vector<float>& distances) const;
+  /**
+   * Every point within `radius` metres of q (inclusive), nearest first, or the max_results nearest of them if
+   * max_results is not 0. The distances reported are those of the metric (squared for Euclidean).
+   */
+  std::size_t radiusSearch(const float q[3], double radius, Metric metric, std::vector<std::int32_t>& indices,
+                           std::vector<float>& distances, std::size_t max_results = 0) const;
+
+  /** Bytes held: the tree, the table and the points' copies. */
+  std::size_t getMemoryBytes() const;
+
+ private:
+  class Policy;
+  class Input;
+  struct Extent;
+  struct Placement;
+  /** A crowded run's point, while it is split into boxes. */
+  struct Slot {
+    float p[3];
+    std::int32_t index;
+  };
+
+  /** Builds the tree of the points' cells, its grid centred on them (or on their bulk). */
+  void placePoints(const Input& in, Extent& extent, Placement& placed);
+  /** The rank of the occupied cell `k` in the tree's Morton order. */
+  std::uint32_t cellRank(ConstAccessor& reader, const Key& k) const;
+  /** Lists each cell's points contiguously, by rank, the outliers last. */
+  void fillTable(const Input& in, Placement& placed, std::uint64_t cells);
+  /** Splits the runs of more than Policy::kCrowded points into boxes (crowd_). */
+  void splitCrowdedRuns(std::uint64_t cells);
+  /** Appends the box of run[begin, end) (table slots from `first`) and, recursively, its halves. */
+  void splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin, std::uint32_t end);
+  std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
+                     std::vector<std::int32_t>& indices, std::vector<float>& distances) const;
+
+  bool automatic_;
+  double resolution_;
+  FastOctTree tree_;
+  std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to
+  std::vector<std::uint64_t> ranks_;  // per pool word: rank of the first occupied cell under a bitmap word
+  // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
+  // finite points beyond the key range, which every search scans (as a crowded cell).
+  std::vector<std::uint32_t> start_;
+  std::vector<float> xyz_;           // the points, grouped by cell
+  std::vector<std::int32_t> index_;  // their indices as given to build
+  /** A box of a crowded run's points: a leaf, or split in two at the median of its longest side. */
+  struct CrowdNode {
+    float lo[3], hi[3];
+    std::uint32_t begin, end;  // the points, in xyz_ / index_
+    std::uint32_t right;       // the second half's node, 0 for a leaf; the first half's follows this one
+    std::int32_t least_index;  // the smallest index of its points, for ties
+  };
+  // Crowded runs, too many points to scan whole, are split into boxes, in pre-order: crowd_root_ holds
+  // each one's cell rank and first node, by rank.
+  std::vector<CrowdNode> crowd_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> crowd_root_;
+};
+
+}  // namespace fot
+}  // namespace pcl

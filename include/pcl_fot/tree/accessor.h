@@ -1,0 +1,161 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <type_traits>
+
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+[[noreturn]] void throwKeyOutOfRange(const char* where, const Key& key);
+
+/**
+ * LineBurstAccess (paper §II): a handle that remembers the root-to-leaf path of its last access and starts
+ * the next one at the deepest common ancestor of the old and new keys. Consecutive points of a range image
+ * and consecutive cells of a ray share all but the lowest levels, so most accesses touch one or two words.
+ *
+ * The path holds pool offsets, which survive pool growth. Any structural change made elsewhere bumps the
+ * tree's structure version, and the accessor then restarts from the root; changes it makes itself keep
+ * its path valid. With line_burst = false every access starts at the root; results are identical.
+ *
+ * One accessor per thread: an accessor is cheap to make and is not shared.
+ */
+template <typename TreeT>
+class BasicAccessor {
+ public:
+  explicit BasicAccessor(TreeT& tree, bool line_burst = true) : tree_(&tree), line_burst_(line_burst) {}
+
+  bool lineBurst() const { return line_burst_; }
+  TreeT& tree() const { return *tree_; }
+
+  CellState getCell(const Key& key) {
+    const TreeCoord c(key);
+    // Keys beyond the range map to coordinates no write can reach, so they read as Unknown.
+    if (!locate(c[0], c[1], c[2])) return CellState::Unknown;
+    return node::state(tree_->words()[path_[bottom_]], c.octant(bottom_));
+  }
+
+  /**
+   * Writes one cell. Throws std::out_of_range for keys outside [kMinKey, kMaxKey] and MemoryLimitError
+   * past the pool cap. Returns what setValidCell() returns.
+   */
+  unsigned setCell(const Key& key, CellState state) {
+    if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::setCell", key);
+    return setValidCell(key, state);
+  }
+
+  /** setCell for a key the caller has already checked with isValidKey(). */
+  unsigned setValidCell(const Key& key, CellState state) {
+    return setValidLeafCells(key, 1u << TreeCoord(key).octant(1), state);
+  }
+
+  /**
+   * Writes `state` into the cells `mask` selects (bit i: octant i) of the 2×2×2 leaf that holds `key`, a
+   * valid key: one access for a run of neighbouring cells, as a ray produces them.
+   *
+   * If those cells all held `state` already, returns the level l of a uniform cube around `key` that holds
+   * `state` everywhere (an aligned cube of 2^l cells per axis in tree coordinates; 0 for a lone cell). A
+   * writer sweeping through space, such as a ray, may then skip the rest of that cube: LineBurstAccess at
+   * its limit, the last visited node answering for the next cells. Returns 0 when anything changed, and
+   * always without LineBurstAccess.
+   */
+  unsigned setValidLeafCells(const Key& key, std::uint32_t mask, CellState state) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    const TreeCoord c(key);
+    const std::uint32_t x = c[0], y = c[1], z = c[2];
+    if (!locate(x, y, z)) {
+      if (state == CellState::Unknown) return 0;  // erasing outside the extent changes nothing
+      tree_->growToCover(x, y, z, 0);
+      locate(x, y, z);
+    }
+    const NodeWord w = tree_->words()[path_[bottom_]];
+    if (bottom_ == 1) {
+      const NodeWord updated = node::withStates(w, mask, state);
+      if (updated == w) return line_burst_ && node::isUniform(w) ? 1 : 0;
+      writeLeaf(updated);
+      return 0;
+    }
+    if (node::state(w, c.octant(bottom_)) == state) return line_burst_ ? bottom_ - 1 : 0;
+    tree_->expandTo(path_, bottom_, x, y, z);
+    bottom_ = 1;
+    writeLeaf(node::withStates(tree_->words()[path_[1]], mask, state));
+    return 0;
+  }
+
+  void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
+
+  /**
+   * Locates the bitmap word whose octant holds `key` and returns its level, or 0 when the key lies outside
+   * the root. Afterwards pathOffset(l) is the pool offset of the level-l word on the way down, for every
+   * level from the returned one up to the root. Search algorithms walk back up this path.
+   */
+  unsigned locatePath(const Key& key) {
+    const TreeCoord c(key);
+    return locate(c[0], c[1], c[2]) ? bottom_ : 0u;
+  }
+  std::size_t pathOffset(unsigned level) const { return path_[level]; }
+
+  /** Forgets the cached path; the next access starts at the root. */
+  void reset() { version_ = kNoPath; }
+
+ private:
+  static constexpr std::uint64_t kNoPath = ~std::uint64_t(0);
+
+  /** Replaces the leaf word at the end of the path: the tree keeps its counts and canonical form. */
+  void writeLeaf(NodeWord updated) {
+    bottom_ = tree_->writeLeaf(path_, updated);
+    version_ = tree_->structureVersion();
+  }
+
+  /** Finds the bitmap word holding (x, y, z): path_[bottom_]. False outside the root. */
+  bool locate(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    const TreeT& t = *tree_;
+    unsigned level;
+    if (line_burst_ && version_ == t.structureVersion()) {
+      level = tree_coord::commonLevel(x ^ x_, y ^ y_, z ^ z_);
+      if (level > t.getDepth()) return false;
+      if (level < bottom_) level = bottom_;
+    } else {
+      const TreeCoord base = t.root().corner;
+      if (((x ^ base[0]) | (y ^ base[1]) | (z ^ base[2])) >> t.getDepth()) return false;
+      level = t.getDepth();
+      path_[level] = 0;
+      bottom_ = level;
+      version_ = t.structureVersion();
+    }
+    const NodeWord* words = t.words();
+    std::size_t at = path_[level];
+    if (level > bottom_) {
+      // The new node one level down is a sibling of the cached one: address it without a load.
+      at = (path_[level - 1] & ~std::size_t(7)) | tree_coord::octant(x, y, z, level);
+      path_[--level] = at;
+    }
+    NodeWord w = words[at];
+    while (!node::isBitmap(w)) {
+      at = node::childOffset(w, tree_coord::octant(x, y, z, level));
+      path_[--level] = at;
+      w = words[at];
+    }
+    bottom_ = level;
+    x_ = x;
+    y_ = y;
+    z_ = z;
+    return true;
+  }
+
+  TreeT* tree_;
+  bool line_burst_;
+  std::uint64_t version_ = kNoPath;
+  std::uint32_t x_ = 0, y_ = 0, z_ = 0;  // last key, tree coordinates
+  unsigned bottom_ = 1;                  // level of the bitmap word at the end of the path
+  std::size_t path_[kMaxLevel + 1];      // path_[l]: pool offset of the level-l word on the path
+};
+
+using Accessor = BasicAccessor<FastOctTree>;
+using ConstAccessor = BasicAccessor<const FastOctTree>;
+
+}  // namespace fot
+}  // namespace pcl

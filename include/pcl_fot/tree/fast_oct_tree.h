@@ -1,0 +1,281 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <type_traits>
+#include <vector>
+
+#include <pcl_fot/tree/cell_grid.h>
+#include <pcl_fot/tree/key.h>
+#include <pcl_fot/tree/node_view.h>
+#include <pcl_fot/tree/node_word.h>
+
+namespace pcl {
+namespace fot {
+
+/** What a batch insertion did with its input. */
+struct InsertStats {
+  std::size_t inserted = 0;      ///< points or keys written
+  std::size_t non_finite = 0;    ///< NaN or Inf points, skipped
+  std::size_t out_of_range = 0;  ///< points or keys beyond the key range, skipped
+};
+
+/** A uniform cube of 2^level cells per axis whose lowest corner is `min_key`. A voxel has level 0. */
+struct Region {
+  Key min_key;
+  unsigned level;
+  CellState state;
+};
+
+/** Thrown when an operation would grow the pool beyond the cap set with setMaxMemoryBytes(). */
+class MemoryLimitError : public std::length_error {
+ public:
+  using std::length_error::length_error;
+};
+
+template <typename TreeT>
+class BasicAccessor;
+
+/**
+ * The FastOctTree of Poppinga et al. (SSRR 2007): an occupancy octree of 4-byte node words.
+ *
+ * Cells are addressed by integer keys on a CellGrid. The root is one word; every other word lives in a
+ * block of 8 siblings in a pool, and blocks are recycled through a free list. Uniform octants collapse
+ * into one bitmap word of their parent after every write, so the tree is always in canonical form: its
+ * shape depends only on its cells, never on the order of writes. The root grows on demand to cover
+ * new keys in any direction.
+ *
+ * Repeated access should go through an Accessor (LineBurstAccess, see accessor.h). Const members are
+ * safe to call from many threads at once; writes need exclusive access.
+ */
+class FastOctTree {
+ public:
+  using Ptr = std::shared_ptr<FastOctTree>;
+  using ConstPtr = std::shared_ptr<const FastOctTree>;
+
+  explicit FastOctTree(double resolution, double origin_x = 0.0, double origin_y = 0.0,
+                       double origin_z = 0.0);
+  explicit FastOctTree(const CellGrid& grid);
+
+  const CellGrid& getGrid() const { return grid_; }
+  double getResolution() const { return grid_.resolution(); }
+
+  /** Unknown outside the mapped extent. */
+  CellState getCell(const Key& key) const;
+  /** Throws std::out_of_range for a key outside [kMinKey, kMaxKey]. */
+  void setCell(const Key& key, CellState state);
+  void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
+
+  /** Unknown beyond the representable range; throws std::invalid_argument for NaN or Inf. */
+  CellState getCellAtPoint(double x, double y, double z) const;
+  /** Throws std::invalid_argument for NaN or Inf and std::out_of_range beyond the key range. */
+  void setCellAtPoint(double x, double y, double z, CellState state);
+  void eraseCellAtPoint(double x, double y, double z) { setCellAtPoint(x, y, z, CellState::Unknown); }
+
+  /**
+   * Sets every cell of the key box [lo, hi] (inclusive on each axis) to `state`. The box is split into
+   * maximal aligned cubes, each written as one word, so time and memory grow with the box's surface, not
+   * its volume (setMaxMemoryBytes bounds them). Throws std::out_of_range for keys beyond the range, and
+   * std::invalid_argument for an empty box (lo above hi on an axis) or one of 2^60 cells or more (the cell
+   * counts are 64-bit). MemoryLimitError past the pool cap leaves the cubes written until then.
+   */
+  void setBox(const Key& lo, const Key& hi, CellState state);
+
+  /** Writes every valid key; invalid keys are skipped and counted. */
+  InsertStats insertKeys(const Key* keys, std::size_t count, CellState state = CellState::Occupied,
+                         bool line_burst = true);
+  /**
+   * Writes the cell of every point. Point i's x, y, z are the three floats at byte offset i * stride_bytes,
+   * which fits the layout of any PCL point type. NaN, Inf and out-of-range points are skipped and counted.
+   */
+  InsertStats insertPoints(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                           CellState state = CellState::Occupied, bool line_burst = true);
+
+  /**
+   * Visits every maximal uniform known cube (a uniform word) in Morton order: visit(const Region&), which
+   * may return false to stop the walk.
+   */
+  template <typename Visitor>
+  void forEachRegion(Visitor&& visit) const;
+  /** As forEachRegion, but only the regions that overlap the key box [lo, hi] (inclusive), whole. */
+  template <typename Visitor>
+  void forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const;
+  /** Visits every cell holding `state` (other than Unknown) in Morton order: visit(const Key&). */
+  template <typename Visitor>
+  void forEachCell(CellState state, Visitor&& visit) const;
+
+  std::uint64_t getOccupiedCount() const { return counts_[std::size_t(CellState::Occupied)]; }
+  std::uint64_t getFreeCount() const { return counts_[std::size_t(CellState::Free)]; }
+  bool empty() const { return words_[0] == node::uniform(CellState::Unknown); }
+
+  /** Blocks of 8 words in use. */
+  std::size_t getBlockCount() const { return live_blocks_; }
+  /** Node words in use: the root plus 8 per block. */
+  std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
+  /** Every byte the tree holds: the object and the pool's allocation, free blocks included. */
+  std::size_t getMemoryBytes() const { return sizeof(*this) + words_.capacity() * sizeof(NodeWord); }
+  /** Root level: the root spans 2^depth cells per axis. */
+  unsigned getDepth() const { return root_level_; }
+
+  /**
+   * Caps the pool. A write that would need more gets MemoryLimitError, and the tree stays as it was.
+   * The default is no cap.
+   */
+  void setMaxMemoryBytes(std::size_t bytes);
+  std::size_t getMaxMemoryBytes() const { return max_bytes_; }
+
+  /** Removes every cell and releases the pool. */
+  void clear();
+
+  /** Same grid and the same state in every cell. */
+  bool operator==(const FastOctTree& other) const;
+  bool operator!=(const FastOctTree& other) const { return !(*this == other); }
+
+  /**
+   * The tree as the .fot format stores it (io/fot_file.h). The root is the smallest cube holding every
+   * known cell. Block 0 holds the root word and seven zero words; the referenced blocks follow in
+   * depth-first pre-order, each reference renumbered. Equal trees give equal pools, word for word.
+   */
+  struct CanonicalPool {
+    unsigned root_level = 1;
+    TreeCoord root_base;
+    std::vector<NodeWord> words;
+  };
+  CanonicalPool canonicalPool() const;
+
+  /**
+   * The tree a canonical pool describes, checked in full before it is built: the root's level and
+   * alignment, block 0's padding, every reference (to the next block in pre-order, never from level 1, no
+   * block left over), every bitmap (spare bits clear, no invalid state), canonical form (no block of 8
+   * uniform words, a minimal root), every known cell within the key range, and the pool's size against
+   * max_bytes. Throws std::invalid_argument naming the first violation.
+   */
+  static FastOctTree fromCanonicalPool(const CellGrid& grid, CanonicalPool pool,
+                                       std::size_t max_bytes = std::numeric_limits<std::size_t>::max());
+
+  /**
+   * Low-level read access, for algorithms built on the tree (search, ψ, io): the root node, walked with
+   * NodeView::child() over words(). The root's pool offset is 0.
+   */
+  NodeView root() const { return NodeView{words_[0], root_level_, base_}; }
+  const NodeWord* words() const { return words_.data(); }
+  std::size_t poolWords() const { return words_.size(); }
+  /** Changes whenever blocks are allocated, freed or re-linked; accessors restart from the root then. */
+  std::uint64_t structureVersion() const { return version_; }
+
+ private:
+  template <typename>
+  friend class BasicAccessor;
+
+  static constexpr std::uint32_t kNoBlock = 0;  // block 0 holds the root word, so it is never free
+
+  /** Makes room for n more blocks, or throws before anything changes. */
+  void reserveBlocks(std::size_t n);
+  std::uint32_t allocBlock();
+  void freeBlock(std::uint32_t block);
+
+  /**
+   * Grows the root until it covers the aligned cube of 2^level cells per axis at (x, y, z), in tree
+   * coordinates (level 0: one cell), and reserves the blocks that writing the cube then takes.
+   */
+  void growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level);
+  /**
+   * Expands the bitmap word at path[level] down to level 1 along (x, y, z), filling path[level-1..1].
+   * Each new block holds the expanded octant states, so the cells keep their values.
+   */
+  void expandTo(std::size_t* path, unsigned level, std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /**
+   * Replaces the leaf word at path[1] by `updated`, keeps the counts, and folds it upwards if it became
+   * uniform. Returns the level of the bitmap word now holding the leaf's cells.
+   */
+  unsigned writeLeaf(const std::size_t* path, NodeWord updated);
+  /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
+  unsigned collapseFrom(const std::size_t* path, unsigned level);
+  /** Writes the aligned cube of 2^level cells per axis whose corner is c. */
+  void setCube(const TreeCoord& c, unsigned level, CellState state);
+  /**
+   * The smallest node holding every known cell: the root, descended while only one octant holds anything.
+   * Canonical form holds below the root, so two trees with the same cells reach the same node.
+   */
+  NodeView contentRoot() const;
+  /** Frees the blocks below word w, of level `level`, and takes its cells out of the counts. */
+  void releaseSubtree(NodeWord w, unsigned level);
+
+  /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
+  template <typename Visitor>
+  static void visitCube(const TreeCoord& corner, unsigned level, Visitor& visit);
+  /** Visits the maximal uniform known cubes below the node, skipping subtrees `overlaps` rejects. */
+  template <typename Overlaps, typename Visitor>
+  bool walkRegions(const NodeView& n, Overlaps& overlaps, Visitor& visit) const;
+
+  CellGrid grid_;
+  std::vector<NodeWord> words_;  // block b is words_[8b .. 8b+7]; words_[0] is the root
+  unsigned root_level_ = 1;
+  TreeCoord base_;
+  std::uint32_t free_head_ = kNoBlock;
+  std::size_t free_blocks_ = 0;
+  std::size_t live_blocks_ = 0;
+  std::size_t max_bytes_ = std::numeric_limits<std::size_t>::max();
+  std::uint64_t version_ = 0;
+  std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
+};
+
+template <typename Overlaps, typename Visitor>
+bool FastOctTree::walkRegions(const NodeView& n, Overlaps& overlaps, Visitor& visit) const {
+  const Key corner = n.corner.key();
+  if (!overlaps(corner, n.level)) return true;
+  if (n.isUniform()) {
+    if (n.uniformState() == CellState::Unknown) return true;
+    const Region region{corner, n.level, n.uniformState()};
+    if constexpr (std::is_same<decltype(visit(region)), bool>::value) {
+      return visit(region);
+    } else {
+      visit(region);
+      return true;
+    }
+  }
+  for (unsigned o = 0; o < 8; ++o)
+    if (!walkRegions(n.child(words_.data(), o), overlaps, visit)) return false;
+  return true;
+}
+
+template <typename Visitor>
+void FastOctTree::forEachRegion(Visitor&& visit) const {
+  auto everywhere = [](const Key&, unsigned) { return true; };
+  walkRegions(root(), everywhere, visit);
+}
+
+template <typename Visitor>
+void FastOctTree::forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const {
+  auto overlaps = [&](const Key& c, unsigned level) {
+    const std::int64_t side = std::int64_t(1) << level;
+    return c.x <= hi.x && c.x + side > lo.x && c.y <= hi.y && c.y + side > lo.y && c.z <= hi.z &&
+           c.z + side > lo.z;
+  };
+  walkRegions(root(), overlaps, visit);
+}
+
+template <typename Visitor>
+void FastOctTree::forEachCell(CellState state, Visitor&& visit) const {
+  if (state == CellState::Unknown)
+    throw std::invalid_argument("pcl::fot::FastOctTree::forEachCell: unknown cells are not enumerable");
+  forEachRegion([&](const Region& r) {
+    if (r.state == state) visitCube(TreeCoord(r.min_key), r.level, visit);
+  });
+}
+
+template <typename Visitor>
+void FastOctTree::visitCube(const TreeCoord& corner, unsigned level, Visitor& visit) {
+  if (level == 0) {
+    visit(corner.key());
+    return;
+  }
+  for (unsigned o = 0; o < 8; ++o) visitCube(corner.child(o, level - 1), level - 1, visit);
+}
+
+}  // namespace fot
+}  // namespace pcl

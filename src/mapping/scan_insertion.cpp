@@ -1,0 +1,229 @@
+#include <pcl_fot/mapping/scan_insertion.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <pcl_fot/detail/bits.h>
+#include <pcl_fot/tree/accessor.h>
+
+#include "mapping/block_ray_walker.h"
+
+namespace pcl {
+namespace fot {
+namespace {
+
+/** Calls `visit(const Key&)` for each cell of the walker's stretch `i`. */
+template <typename Visit>
+void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& visit) {
+  std::uint32_t block[3];
+  walker.block(walker.blockKey(i), block);
+  for (std::uint64_t cells = walker.cells(i); cells != 0; cells &= cells - 1)
+    visit(detail::block_cells::cellKey(block, detail::lowestBit(cells)));
+}
+
+/**
+ * The tree's side. With LineBurstAccess, the rays' cells come a 4×4×4 block at a time, and a table
+ * remembers the blocks written lately: neighbouring rays cross the same blocks again and again, and the
+ * table answers for them. A block's first leaf is written at once, so that a cube the tree reports free
+ * already is passed without touching it: the last visited node answers for the next cells. The block's
+ * other cells wait in the table and go into the tree a block at a time, when another block takes the slot,
+ * the block is all free, or the rays are done: one short access per leaf instead of one from wherever the
+ * last ray was. Phase 1 only ever adds free cells, so a cube found free stays free. Without
+ * LineBurstAccess, every cell is its own access from the root.
+ */
+class TreeWriter {
+ public:
+  /** `rays`, the scan's size, sizes the table of written blocks: one entry per ray, 2^10 to 2^16. */
+  TreeWriter(FastOctTree& t, bool line_burst, std::size_t rays)
+      : accessor_(t, line_burst), line_burst_(line_burst) {
+    if (!line_burst) return;
+    while (written_bits_ < 16 && (std::size_t(1) << written_bits_) < rays) ++written_bits_;
+    written_.resize(std::size_t(1) << written_bits_);
+  }
+
+  /** The walker's batch of `n` stretches. */
+  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
+    if (!line_burst_) {
+      for (std::size_t i = 0; i < n; ++i) forEachCell(walker, i, [&](const Key& k) { freeCell(k); });
+      return;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t key = walker.blockKey(i), cells = walker.cells(i);
+      if (((key ^ cube_key_) & cube_mask_) == 0) continue;
+      Written& w = written_[(key * 0x9E3779B97F4A7C15u) >> (64 - written_bits_)];
+      if (w.key != key) {
+        replace(walker, w, key, cells);
+        continue;
+      }
+      const std::uint64_t fresh = cells & ~w.cells;
+      w.pending |= fresh;
+      w.cells |= cells;
+      // A block that just filled goes to the tree now, which folds it. Rays keep crossing full blocks, so
+      // one branch tests both conditions: it is rarely taken and easy to predict.
+      if ((~w.cells | std::uint64_t(fresh == 0)) == 0) flush(walker, w);
+    }
+  }
+
+  /** Writes the cells still waiting in the table; the rays' free cells are all in the tree afterwards. */
+  void finishFree(const detail::BlockRayWalker& walker) {
+    for (Written& w : written_) flush(walker, w);
+  }
+
+  void freeCell(const Key& k) { accessor_.setValidCell(k, CellState::Free); }
+  void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
+
+ private:
+  /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
+  struct Written {
+    std::uint64_t key = ~std::uint64_t(0);  // the walker's block key; no block has this one
+    std::uint64_t cells = 0;                // see detail::block_cells
+    std::uint64_t pending = 0;              // the subset not written to the tree yet
+  };
+
+  /** Takes a new block into its slot, whose block goes to the tree; off the hot path of blocks seen. */
+  __attribute__((noinline)) void replace(const detail::BlockRayWalker& walker, Written& w, std::uint64_t key,
+                                         std::uint64_t cells) {
+    flush(walker, w);
+    w.key = key;
+    w.cells = cells;
+    const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(cells));
+    w.pending = cells & ~detail::block_cells::leafBits(leaf);
+    std::uint32_t block[3];
+    walker.block(key, block);
+    const unsigned skip =
+        accessor_.setValidLeafCells(detail::block_cells::leafKey(block, leaf),
+                                    detail::block_cells::leafMask(cells, leaf), CellState::Free);
+    if (skip < 2) return;  // the cube must hold whole blocks
+    cube_key_ = key;
+    cube_mask_ = detail::BlockRayWalker::cubeMask(skip);
+  }
+
+  void flush(const detail::BlockRayWalker& walker, Written& w) {
+    if (w.pending == 0) return;
+    std::uint32_t block[3];
+    walker.block(w.key, block);
+    for (std::uint64_t p = w.pending; p != 0;) {
+      const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(p));
+      accessor_.setValidLeafCells(detail::block_cells::leafKey(block, leaf),
+                                  detail::block_cells::leafMask(p, leaf), CellState::Free);
+      p &= ~detail::block_cells::leafBits(leaf);
+    }
+    w.pending = 0;
+  }
+
+  Accessor accessor_;
+  bool line_burst_;
+  // A cube the tree holds free: the blocks whose keys match cube_key_ on cube_mask_ (none at first).
+  std::uint64_t cube_key_ = ~std::uint64_t(0), cube_mask_ = ~std::uint64_t(0);
+  unsigned written_bits_ = 10;
+  std::vector<Written> written_;
+};
+
+class GridWriter {
+ public:
+  explicit GridWriter(FastOccMesh& g) : grid_(g) {}
+  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) forEachCell(walker, i, [&](const Key& k) { freeCell(k); });
+  }
+  void finishFree(const detail::BlockRayWalker&) {}
+  void freeCell(const Key& k) {
+    if (grid_.contains(k)) grid_.setCell(k, CellState::Free);
+  }
+  void occupied(const Key& k) {
+    if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
+  }
+
+ private:
+  FastOccMesh& grid_;
+};
+
+/** A ray may step one cell past its end keys; keep those cells inside the key range too. */
+bool traceable(const Key& k) {
+  return k.x > kMinKey && k.x < kMaxKey && k.y > kMinKey && k.y < kMaxKey && k.z > kMinKey && k.z < kMaxKey;
+}
+
+template <typename Writer>
+ScanStats insert(Writer& writer, const CellGrid& grid, const float sensor[3], const float* xyz,
+                 std::size_t count, std::size_t stride_bytes, const ScanOptions& options) {
+  if (!std::isfinite(sensor[0]) || !std::isfinite(sensor[1]) || !std::isfinite(sensor[2]))
+    throw std::invalid_argument("pcl::fot::insertRays: the sensor position is not finite");
+  Key sensor_key;
+  if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], sensor_key) || !traceable(sensor_key))
+    throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
+
+  ScanStats stats;
+  std::vector<float> ends;  // xyz of each ray's end
+  ends.reserve(3 * count);
+  std::vector<float> far;  // the ends of rays too long for the walker's words (see BlockRayWalker::kReach)
+  const auto addRay = [&](const float* end, const Key& end_key) {
+    std::vector<float>& to = detail::BlockRayWalker::reaches(sensor_key, end_key) ? ends : far;
+    to.insert(to.end(), end, end + 3);
+    ++stats.rays;
+  };
+  std::vector<Key> endpoints;
+  endpoints.reserve(count);
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      ++stats.non_finite;
+      continue;
+    }
+    // OctoMap's arithmetic: a float difference, its squared norm summed in float.
+    const float d[3] = {p[0] - sensor[0], p[1] - sensor[1], p[2] - sensor[2]};
+    const double dist = std::sqrt(double(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    if (dist < options.min_range) {
+      ++stats.too_close;
+      continue;
+    }
+    if (options.max_range > 0.0 && dist > options.max_range) {
+      const float len = float(dist), range = float(options.max_range);
+      const float end[3] = {sensor[0] + d[0] / len * range, sensor[1] + d[1] / len * range,
+                            sensor[2] + d[2] / len * range};
+      Key end_key;
+      if (!grid.pointToKey(end[0], end[1], end[2], end_key) || !traceable(end_key)) {
+        ++stats.out_of_range;
+        continue;
+      }
+      addRay(end, end_key);
+      ++stats.truncated;
+      continue;
+    }
+    Key key;
+    if (!grid.pointToKey(p[0], p[1], p[2], key) || !traceable(key)) {
+      ++stats.out_of_range;
+      continue;
+    }
+    addRay(p, key);
+    endpoints.push_back(key);
+  }
+  detail::BlockRayWalker walker(grid, sensor, ends.data(), ends.size() / 3);
+  while (const std::size_t n = walker.next()) writer.freeStretches(walker, n);
+  writer.finishFree(walker);
+  stats.ray_cells = walker.cellCount();
+  for (std::size_t i = 0; i < far.size(); i += 3)
+    stats.ray_cells += traceSegment(grid, sensor, &far[i], [&](const Key& k) { writer.freeCell(k); });
+  // Endpoints last: within a scan, occupied wins over free.
+  for (const Key& k : endpoints) writer.occupied(k);
+  stats.occupied = endpoints.size();
+  return stats;
+}
+
+}  // namespace
+
+ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, std::size_t count,
+                     std::size_t stride_bytes, const ScanOptions& options) {
+  TreeWriter writer(map, options.line_burst, count);
+  return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+}
+
+ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, std::size_t count,
+                     std::size_t stride_bytes, const ScanOptions& options) {
+  GridWriter writer(map);
+  return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+}
+
+}  // namespace fot
+}  // namespace pcl

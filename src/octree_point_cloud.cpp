@@ -1,7 +1,0 @@
-#include <pcl_fot/impl/octree_point_cloud.hpp>
-
-#ifndef PCL_NO_PRECOMPILE
-#include <pcl/point_types.h>
-#include <pcl/impl/instantiate.hpp>
-PCL_INSTANTIATE(OctreePointCloud, PCL_XYZ_POINT_TYPES)
-#endif

@@ -1,0 +1,573 @@
+#include <pcl_fot/search/point_index.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+
+#include <pcl_fot/tree/accessor.h>
+
+#include "search/cell_size.h"
+#include "search/neighbour_walk.h"
+
+namespace pcl {
+namespace fot {
+namespace {
+
+struct Hit {
+  float distance;
+  std::int32_t index;
+  std::uint32_t slot;  // where the point sits in the table
+  bool operator<(const Hit& o) const {
+    return distance < o.distance || (distance == o.distance && index < o.index);
+  }
+};
+
+bool finite3(const float* p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+/** PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float. */
+inline float pointDistance(Metric metric, const float* p, const float q[3]) {
+  const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+  return metric == Metric::Euclidean ? dx * dx + dy * dy + dz * dz
+                                     : std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
+}
+
+/** The Morton number of a cell inside an aligned cube of 2^level cells, in the tree's octant order. */
+std::uint64_t mortonWithin(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
+  std::uint64_t code = 0;
+  for (unsigned b = 0; b < level; ++b)
+    code |= (std::uint64_t((x >> b) & 1u) << (3 * b)) | (std::uint64_t((y >> b) & 1u) << (3 * b + 1)) |
+            (std::uint64_t((z >> b) & 1u) << (3 * b + 2));
+  return code;
+}
+
+/** Numbers the occupied cells in Morton order: each bitmap word gets the rank of its first one. */
+std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_t offset, std::uint64_t next,
+                          std::vector<std::uint64_t>& ranks) {
+  if (n.isBitmap()) {
+    ranks[offset] = next;
+    return next + node::cellsIn(node::popcount(node::octantMask(n.word, CellState::Occupied)), n.level - 1);
+  }
+  for (unsigned o = 0; o < 8; ++o)
+    next = assignRanks(tree, n.child(tree.words(), o), n.childOffset(o), next, ranks);
+  return next;
+}
+
+std::atomic<std::uint64_t> next_build_id{1};
+constexpr std::uint32_t kNoSlot = ~std::uint32_t(0);
+
+}  // namespace
+
+/** Distances from one query point, in metres, to the points of the cells the walk visits. */
+class PointIndex::Policy {
+ public:
+  using Distance = double;
+
+  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into
+   * metres. */
+  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k,
+         double limit, std::vector<Hit>& results)
+      : index_(index),
+        q_{q[0], q[1], q[2]},
+        metric_(metric),
+        k_(k),
+        limit_(limit),
+        bound_(limit),
+        results_(results) {
+    const double res = index.tree_.getGrid().resolution();
+    scale_ = metric == Metric::Euclidean ? res * res : res;
+    const double slack =
+        0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / res;
+    for (int a = 0; a < 3; ++a) low_[a] = qc[a] - slack, high_[a] = qc[a] + slack;
+  }
+
+  // Bounds are shaded down a little. Gaps in cells are measured from the query widened by a few ulps of its
+  // cell coordinates, as much as its cell and a point's may be off by in rounding (a point exactly at the
+  // query may lie in the next cell), and by 1e-22 m, below which float squares lose their precision among
+  // denormals. Then a float distance may come out up to a few ulps below the exact one.
+  void childGaps(const TreeCoord& lo, unsigned child_level, Distance gap[3][2]) const {
+    const double half = double(std::uint64_t(1) << child_level);
+    for (int a = 0; a < 3; ++a) {
+      const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
+      const double below = std::max({low - high_[a], low_[a] - mid, 0.0}),
+                   above = std::max({mid - high_[a], low_[a] - high, 0.0});
+      gap[a][0] = shade((metric_ == Metric::Euclidean ? below * below : below) * scale_);
+      gap[a][1] = shade((metric_ == Metric::Euclidean ? above * above : above) * scale_);
+    }
+  }
+
+  Distance exterior(const TreeCoord& lo, unsigned level) const {
+    const double side = double(std::uint64_t(1) << level);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      const double box_lo = double(tree_coord::toKey(lo[a]));
+      nearest = std::min({nearest, low_[a] - box_lo, box_lo + side - high_[a]});
+    }
+    nearest = std::max(nearest, 0.0);
+    return shade((metric_ == Metric::Euclidean ? nearest * nearest : nearest) * scale_);
+  }
+
+  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
+  bool mayImprove(Distance, const TreeCoord&, unsigned) const { return true; }
+  bool settled(const TreeCoord& lo, unsigned level) const { return bound_ < exterior(lo, level); }
+  bool wholeRegions() const { return false; }
+  void visitRegion(const TreeCoord&, unsigned, std::uint64_t) {}
+
+  /**
+   * A cell's points, or the outliers' (the run after the last cell). A crowded run is split into boxes (see
+   * build), visited nearer first and skipped when beyond the bound.
+   */
+  void visitCell(const TreeCoord&, std::uint64_t rank) {
+    const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
+    if (metric_ == Metric::Euclidean)
+      scanRun<Metric::Euclidean>(rank, begin, end);
+    else
+      scanRun<Metric::Manhattan>(rank, begin, end);
+  }
+
+  /** Runs with more points than this are split into boxes. */
+  static constexpr std::uint32_t kCrowded = 64;
+  /** The most points a box of a crowded run holds unsplit. */
+  static constexpr std::uint32_t kCrowdLeaf = 16;
+  /** k for every point within the bound. */
+  static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
+  /**
+   * Beyond this k, insertion in order, O(k) a point, costs more than a heap's O(log k) and a sort at the end:
+   * callgrind put the crossover at k = 70 to 80 on a Kinect frame and a room scan.
+   */
+  static constexpr std::size_t kLargeK = 80;
+
+  void offer(const float* p, std::int32_t index, std::uint32_t slot) {
+    const Hit h{pointDistance(metric_, p, q_), index, slot};
+    if (double(h.distance) <= bound_) keep(h);
+  }
+
+ private:
+  template <Metric M>
+  void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
+    const float* xyz = index_.xyz_.data();
+    if (end - begin <= kCrowded) {
+      for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
+      return;
+    }
+    const auto& roots = index_.crowd_root_;
+    const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
+    scanBoxes<M>(root->second);
+  }
+
+  /** A crowded run's boxes, depth first, the nearer half first; a box is skipped once beyond the bound. */
+  template <Metric M>
+  void scanBoxes(std::uint32_t node) {
+    const float* xyz = index_.xyz_.data();
+    const CrowdNode* nodes = index_.crowd_.data();
+    std::uint32_t pending[64];  // one per level at most: the farther halves, with their distances
+    float pending_distance[64];
+    int top = 0;
+    for (;;) {
+      const CrowdNode& box = nodes[node];
+      if (box.right == 0) {
+        for (std::uint32_t i = box.begin; i < box.end; ++i) consider<M>(xyz, i);
+      } else {
+        std::uint32_t nearer = node + 1, farther = box.right;
+        float near_d = boxDistance<M>(nodes[nearer]), far_d = boxDistance<M>(nodes[farther]);
+        if (far_d < near_d) std::swap(nearer, farther), std::swap(near_d, far_d);
+        if (mayHold(far_d, nodes[farther])) pending[top] = farther, pending_distance[top++] = far_d;
+        if (mayHold(near_d, nodes[nearer])) {
+          node = nearer;
+          continue;
+        }
+      }
+      while (top > 0 && !mayHold(pending_distance[top - 1], nodes[pending[top - 1]])) --top;
+      if (top == 0) return;
+      node = pending[--top];
+    }
+  }
+
+  /**
+   * A box at `distance` may hold a point the results take. Once k are kept, one at the k-th's distance must
+   * have a smaller index, so a pile of equal points (sensors that write (0, 0, 0) for no return) is not
+   * scanned whole: its halves split by index.
+   */
+  bool mayHold(float distance, const CrowdNode& box) const {
+    if (double(distance) != bound_) return double(distance) < bound_;
+    return results_.size() < k_ || box.least_index < worst().index;
+  }
+
+  /** The k-th best kept, once there are k. */
+  const Hit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
+
+  /**
+   * The least distance PCL could report for a point in the box: the gaps, squared and summed in the order of
+   * pointDistance, whose float steps are each monotone, so no point in the box comes out below it.
+   */
+  template <Metric M>
+  float boxDistance(const CrowdNode& box) const {
+    float gap[3];
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({box.lo[a] - q_[a], q_[a] - box.hi[a], 0.0f});
+    return M == Metric::Euclidean ? gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]
+                                  : gap[0] + gap[1] + gap[2];
+  }
+
+  /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
+  template <Metric M>
+  void consider(const float* xyz, std::uint32_t i) {
+    const float d = pointDistance(M, &xyz[3 * std::size_t(i)], q_);
+    if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
+  }
+
+  /**
+   * A point within the bound joins the results. Up to kLargeK, the k best are kept sorted, as FLANN keeps
+   * them: the walk finds points roughly nearest first, so a new one mostly goes near the end. A larger k
+   * keeps them in a heap, sorted at the end, and so do radius searches without max_nn, which keep every
+   * point.
+   */
+  void keep(const Hit& h) {
+    if (k_ == kAll) {
+      results_.push_back(h);
+      return;
+    }
+    if (k_ > kLargeK) {
+      keepInHeap(h);
+      return;
+    }
+    if (results_.size() == k_) {
+      if (!(h < results_.back())) return;
+      results_.pop_back();
+    }
+    std::size_t i = results_.size();
+    results_.push_back(h);
+    for (; i > 0 && h < results_[i - 1]; --i) results_[i] = results_[i - 1];
+    results_[i] = h;
+    if (results_.size() == k_) bound_ = std::min(limit_, double(results_.back().distance));
+  }
+
+  /** The k best in a max-heap: the k-th best on top. */
+  void keepInHeap(const Hit& h) {
+    if (results_.size() == k_) {
+      if (!(h < results_.front())) return;
+      std::pop_heap(results_.begin(), results_.end());
+      results_.back() = h;
+    } else {
+      results_.push_back(h);
+    }
+    std::push_heap(results_.begin(), results_.end());
+    if (results_.size() == k_) bound_ = std::min(limit_, double(results_.front().distance));
+  }
+
+  static double shade(double d) { return d * (1.0 - 4e-6); }
+
+  const PointIndex& index_;
+  float q_[3];
+  double low_[3], high_[3];  // the query in cells from the grid origin, widened by its rounding
+  double scale_;             // cell units to the metric's units
+  Metric metric_;
+  std::size_t k_;
+  double limit_;
+  double bound_;  // what a point must not exceed: the k-th best so far, else the limit
+  std::vector<Hit>& results_;
+};
+
+PointIndex::PointIndex() : automatic_(true), resolution_(0.01), tree_(resolution_) {}
+
+PointIndex::PointIndex(double resolution) : automatic_(false), resolution_(resolution), tree_(resolution) {}
+
+/** The points given to build: input point j is the cloud's point subset[j], or its point j. */
+class PointIndex::Input {
+ public:
+  Input(const float* xyz, std::size_t count, std::size_t stride_bytes, const std::int32_t* subset,
+        std::size_t subset_size)
+      : bytes_(reinterpret_cast<const char*>(xyz)),
+        count_(count),
+        stride_(stride_bytes),
+        subset_(subset),
+        size_(subset ? subset_size : count) {}
+
+  std::size_t size() const { return size_; }
+  const float* point(std::size_t i) const { return reinterpret_cast<const float*>(bytes_ + i * stride_); }
+  /** The cloud index of input point j; -1 if it lies outside the cloud or is not finite. */
+  std::int64_t source(std::size_t j) const {
+    const std::int64_t i = subset_ ? subset_[j] : std::int64_t(j);
+    return (i >= 0 && std::size_t(i) < count_ && finite3(point(std::size_t(i)))) ? i : -1;
+  }
+
+ private:
+  const char* bytes_;
+  std::size_t count_, stride_;
+  const std::int32_t* subset_;
+  std::size_t size_;
+};
+
+/** Where the finite points lie: their bounding box, and their bulk (see bulkBox) once it is needed. */
+struct PointIndex::Extent {
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  std::size_t finite = 0;
+  std::vector<std::array<float, 3>> sample;  // an even sample of the points, once the bulk is found
+  double bulk_lo[3] = {0, 0, 0}, bulk_hi[3] = {0, 0, 0};
+
+  explicit Extent(const Input& in) {
+    for (std::size_t j = 0; j < in.size(); ++j) {
+      const std::int64_t i = in.source(j);
+      if (i < 0) continue;
+      ++finite;
+      const float* p = in.point(std::size_t(i));
+      for (int a = 0; a < 3; ++a)
+        lo[a] = std::min(lo[a], double(p[a])), hi[a] = std::max(hi[a], double(p[a]));
+    }
+  }
+
+  void findBulk(const Input& in) {
+    const std::size_t n = in.size(), m = std::min(n, detail::kCellSizeSample);
+    sample.reserve(m);
+    for (std::size_t s = 0; s < m; ++s) {
+      const std::int64_t i = in.source(s * n / m);
+      if (i < 0) continue;
+      const float* p = in.point(std::size_t(i));
+      sample.push_back({p[0], p[1], p[2]});
+    }
+    detail::bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
+  }
+};
+
+/** The points the tree holds, by cell key, and the outliers: finite points beyond the key range. */
+struct PointIndex::Placement {
+  std::vector<Key> keys;
+  std::vector<std::int32_t> ids, outliers;
+};
+
+void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                       const std::int32_t* subset, std::size_t subset_size) {
+  const Input in(xyz, count, stride_bytes, subset, subset_size);
+  Extent extent(in);
+  if (extent.finite > 0 && automatic_) {
+    extent.findBulk(in);
+    resolution_ = detail::chooseCellSize(extent.sample, extent.finite, extent.lo, extent.hi, extent.bulk_lo,
+                                         extent.bulk_hi);
+  }
+  Placement placed;
+  placePoints(in, extent, placed);
+  // A sample sees few of the sparse cells, so where occupancy varies (a LiDAR's returns: dense near, sparse
+  // far) the edge it gives can be several times too fine. The tree counts its cells exactly: then it gives
+  // the edge, and the points go in again.
+  if (automatic_ &&
+      double(placed.keys.size()) < 0.5 * detail::kPointsPerCell * double(tree_.getOccupiedCount())) {
+    resolution_ = detail::coarserCellSize(tree_, placed.keys.size());
+    placePoints(in, extent, placed);
+  }
+  build_id_ = next_build_id++;
+  ranks_.assign(tree_.poolWords(), 0);
+  const std::uint64_t cells = assignRanks(tree_, tree_.root(), 0, 0, ranks_);
+  fillTable(in, placed, cells);
+  splitCrowdedRuns(cells);
+}
+
+void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed) {
+  double origin[3] = {0, 0, 0};
+  if (extent.finite > 0) {
+    // The grid is centred on the points, or on their bulk when they reach further than its keys: then a
+    // few stray points far away become the outliers, rather than the bulk.
+    const double reach = 2.0 * double(kMaxKey) * resolution_;
+    const bool fits = extent.hi[0] - extent.lo[0] <= reach && extent.hi[1] - extent.lo[1] <= reach &&
+                      extent.hi[2] - extent.lo[2] <= reach;
+    if (!fits && extent.sample.empty()) extent.findBulk(in);
+    for (int a = 0; a < 3; ++a) {
+      const double centre =
+          0.5 * (fits ? extent.lo[a] + extent.hi[a] : extent.bulk_lo[a] + extent.bulk_hi[a]);
+      origin[a] = std::floor(centre / resolution_) * resolution_;
+    }
+  }
+  // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the
+  // points beyond its key range are outliers.
+  if (!CellGrid::whyInvalid(resolution_, origin[0], origin[1], origin[2]).empty())
+    std::fill(origin, origin + 3, 0.0);
+  tree_ = FastOctTree(CellGrid(resolution_, origin[0], origin[1], origin[2]));
+  placed.keys.clear();
+  placed.ids.clear();
+  placed.outliers.clear();
+  placed.keys.reserve(in.size());
+  placed.ids.reserve(in.size());
+  Accessor writer(tree_);
+  for (std::size_t j = 0; j < in.size(); ++j) {
+    const std::int64_t i = in.source(j);
+    if (i < 0) continue;
+    const float* p = in.point(std::size_t(i));
+    Key key;
+    if (!tree_.getGrid().pointToKey(p[0], p[1], p[2], key)) {
+      placed.outliers.push_back(std::int32_t(i));
+      continue;
+    }
+    writer.setValidCell(key, CellState::Occupied);
+    placed.keys.push_back(key);
+    placed.ids.push_back(std::int32_t(i));
+  }
+}
+
+std::uint32_t PointIndex::cellRank(ConstAccessor& reader, const Key& k) const {
+  const unsigned level = reader.locatePath(k);
+  const std::size_t offset = reader.pathOffset(level);
+  const TreeCoord u(k);
+  const unsigned o = u.octant(level);
+  const std::uint32_t before =
+      node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
+  const std::uint32_t inner = tree_coord::lowMask(level - 1);
+  return std::uint32_t(ranks_[offset] + node::cellsIn(node::popcount(before), level - 1) +
+                       mortonWithin(u[0] & inner, u[1] & inner, u[2] & inner, level - 1));
+}
+
+void PointIndex::fillTable(const Input& in, Placement& placed, std::uint64_t cells) {
+  // Each point's cell rank, then a counting sort into the table. The outliers come last, as one more run.
+  std::vector<std::uint32_t> rank_of(placed.keys.size());
+  ConstAccessor reader(tree_);
+  for (std::size_t j = 0; j < placed.keys.size(); ++j) rank_of[j] = cellRank(reader, placed.keys[j]);
+  std::vector<std::int32_t>& ids = placed.ids;
+  ids.insert(ids.end(), placed.outliers.begin(), placed.outliers.end());
+  rank_of.resize(ids.size(), std::uint32_t(cells));
+  start_.assign(std::size_t(cells) + 2, 0);
+  for (std::uint32_t r : rank_of) ++start_[r + 1];
+  for (std::size_t c = 0; c <= cells; ++c) start_[c + 1] += start_[c];
+  xyz_.resize(3 * ids.size());
+  index_.resize(ids.size());
+  std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    const std::uint32_t at = fill[rank_of[j]]++;
+    const float* p = in.point(std::size_t(ids[j]));
+    std::copy(p, p + 3, &xyz_[3 * std::size_t(at)]);
+    index_[at] = ids[j];
+  }
+}
+
+void PointIndex::splitCrowdedRuns(std::uint64_t cells) {
+  // Crowded runs are split into boxes at the median of their longest side, for Policy::scanBoxes.
+  crowd_.clear();
+  crowd_root_.clear();
+  std::vector<Slot> run;
+  for (std::size_t c = 0; c <= cells; ++c) {
+    const std::uint32_t begin = start_[c], end = start_[c + 1];
+    if (end - begin <= Policy::kCrowded) continue;
+    run.resize(end - begin);
+    for (std::uint32_t i = begin; i < end; ++i)
+      run[i - begin] = {
+          {xyz_[3 * std::size_t(i)], xyz_[3 * std::size_t(i) + 1], xyz_[3 * std::size_t(i) + 2]}, index_[i]};
+    crowd_root_.emplace_back(std::uint32_t(c), std::uint32_t(crowd_.size()));
+    splitBox(run, begin, 0, end - begin);
+    for (std::uint32_t i = begin; i < end; ++i) {
+      std::copy(run[i - begin].p, run[i - begin].p + 3, &xyz_[3 * std::size_t(i)]);
+      index_[i] = run[i - begin].index;
+    }
+  }
+}
+
+void PointIndex::splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin,
+                          std::uint32_t end) {
+  const std::size_t node = crowd_.size();
+  CrowdNode box{{run[begin].p[0], run[begin].p[1], run[begin].p[2]},
+                {run[begin].p[0], run[begin].p[1], run[begin].p[2]},
+                first + begin,
+                first + end,
+                0,
+                run[begin].index};
+  for (std::uint32_t i = begin + 1; i < end; ++i) {
+    for (int a = 0; a < 3; ++a)
+      box.lo[a] = std::min(box.lo[a], run[i].p[a]), box.hi[a] = std::max(box.hi[a], run[i].p[a]);
+    box.least_index = std::min(box.least_index, run[i].index);
+  }
+  crowd_.push_back(box);
+  if (end - begin <= Policy::kCrowdLeaf) return;
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (box.hi[a] - box.lo[a] > box.hi[axis] - box.lo[axis]) axis = a;
+  const std::uint32_t mid = begin + (end - begin) / 2;
+  std::nth_element(run.begin() + begin, run.begin() + mid, run.begin() + end,
+                   [axis](const Slot& u, const Slot& v) {
+                     return u.p[axis] < v.p[axis] || (u.p[axis] == v.p[axis] && u.index < v.index);
+                   });
+  splitBox(run, first, begin, mid);
+  crowd_[node].right = std::uint32_t(crowd_.size());
+  splitBox(run, first, mid, end);
+}
+
+std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Metric metric,
+                               std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
+  indices.clear();
+  distances.clear();
+  if (!finite3(q) || k == 0 || bound < 0 || index_.empty()) return 0;
+
+  // This thread's path from its previous query on this build, so queries in spatial order start near.
+  thread_local const PointIndex* owner = nullptr;
+  thread_local std::uint64_t owner_build = 0;
+  thread_local std::optional<ConstAccessor> accessor;
+  const bool accessor_fresh = owner != this || owner_build != build_id_ || !accessor;
+  if (accessor_fresh) {
+    accessor.emplace(tree_);
+    owner = this;
+    owner_build = build_id_;
+  }
+
+  // The walk starts in the query's cell; any nearby cell would give the same, exact, answer, so the cell
+  // comes from the reciprocal, clamped for far queries, rather than from pointToKey's exact division. The
+  // boxes' gaps allow for the difference (Policy's slack).
+  const CellGrid& grid = tree_.getGrid();
+  const double inverse = 1.0 / grid.resolution();
+  double qc[3];
+  std::int32_t cell[3];
+  for (int a = 0; a < 3; ++a) {
+    qc[a] = (double(q[a]) - grid.origin()[a]) * inverse;
+    cell[a] = std::int32_t(std::clamp(std::floor(qc[a]), double(kMinKey), double(kMaxKey)));
+  }
+  const Key key{cell[0], cell[1], cell[2]};
+  thread_local std::vector<Hit> results;
+  thread_local std::uint32_t last_slot = kNoSlot;  // this thread's previous nearest point on this build
+  if (accessor_fresh) last_slot = kNoSlot;
+  results.clear();
+  const std::size_t keep = k >= size() ? Policy::kAll : k;  // all of them: no insertion in order needed
+  Policy policy(*this, q, qc, metric, keep, bound, results);
+  // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
+  // a point twice is harmless for one neighbour (the repeat does not beat itself).
+  if (keep == 1 && last_slot != kNoSlot)
+    policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
+  const std::size_t outliers = start_.size() - 2;  // the rank of the run after the cells'
+  if (start_[outliers] > 0)
+    detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
+  if (start_[outliers + 1] > start_[outliers]) policy.visitCell(TreeCoord(), outliers);
+
+  if (keep == Policy::kAll || keep > Policy::kLargeK) std::sort(results.begin(), results.end());
+  if (k == 1 && !results.empty()) last_slot = results.front().slot;
+  indices.reserve(results.size());
+  distances.reserve(results.size());
+  for (const Hit& h : results) {
+    indices.push_back(h.index);
+    distances.push_back(h.distance);
+  }
+  return results.size();
+}
+
+std::size_t PointIndex::nearestK(const float q[3], std::size_t k, Metric metric,
+                                 std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
+  return search(q, k, std::numeric_limits<double>::infinity(), metric, indices, distances);
+}
+
+std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric metric,
+                                     std::vector<std::int32_t>& indices, std::vector<float>& distances,
+                                     std::size_t max_results) const {
+  if (!(radius >= 0)) {
+    indices.clear();
+    distances.clear();
+    return 0;
+  }
+  const double limit = metric == Metric::Euclidean ? radius * radius : radius;
+  return search(q, max_results ? max_results : Policy::kAll, limit, metric, indices, distances);
+}
+
+std::size_t PointIndex::getMemoryBytes() const {
+  return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
+         start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
+         index_.capacity() * sizeof(std::int32_t) + crowd_.capacity() * sizeof(CrowdNode) +
+         crowd_root_.capacity() * sizeof(crowd_root_[0]);
+}
+
+}  // namespace fot
+}  // namespace pcl

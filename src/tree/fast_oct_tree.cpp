@@ -1,0 +1,354 @@
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <pcl_fot/tree/accessor.h>
+
+namespace pcl {
+namespace fot {
+
+void throwKeyOutOfRange(const char* where, const Key& key) {
+  throw std::out_of_range(std::string(where) + ": key " + toString(key) +
+                          " is outside the supported range [" + std::to_string(kMinKey) + ", " +
+                          std::to_string(kMaxKey) + "] per axis");
+}
+
+FastOctTree::FastOctTree(double resolution, double origin_x, double origin_y, double origin_z)
+    : FastOctTree(CellGrid(resolution, origin_x, origin_y, origin_z)) {}
+
+FastOctTree::FastOctTree(const CellGrid& grid) : grid_(grid), words_(8, 0) {
+  words_[0] = node::uniform(CellState::Unknown);
+}
+
+CellState FastOctTree::getCell(const Key& key) const {
+  return ConstAccessor(*this, false).getCell(key);
+}
+
+void FastOctTree::setCell(const Key& key, CellState state) {
+  Accessor(*this, false).setCell(key, state);
+}
+
+CellState FastOctTree::getCellAtPoint(double x, double y, double z) const {
+  Key key;
+  return grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOctTree::getCellAtPoint") ? getCell(key)
+                                                                                       : CellState::Unknown;
+}
+
+void FastOctTree::setCellAtPoint(double x, double y, double z, CellState state) {
+  Key key;
+  if (!grid_.finitePointToKey(x, y, z, key, "pcl::fot::FastOctTree::setCellAtPoint"))
+    throw std::out_of_range("pcl::fot::FastOctTree::setCellAtPoint: the point lies beyond the key range of " +
+                            std::to_string(kMaxKey) + " cells from the map origin");
+  setCell(key, state);
+}
+
+InsertStats FastOctTree::insertKeys(const Key* keys, std::size_t count, CellState state, bool line_burst) {
+  Accessor accessor(*this, line_burst);
+  InsertStats stats;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!isValidKey(keys[i])) {
+      ++stats.out_of_range;
+      continue;
+    }
+    accessor.setCell(keys[i], state);
+    ++stats.inserted;
+  }
+  return stats;
+}
+
+InsertStats FastOctTree::insertPoints(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                                      CellState state, bool line_burst) {
+  Accessor accessor(*this, line_burst);
+  InsertStats stats;
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
+    Key key;
+    if (grid_.pointToKey(p[0], p[1], p[2], key)) {
+      accessor.setValidCell(key, state);
+      ++stats.inserted;
+    } else if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) {
+      ++stats.out_of_range;
+    } else {
+      ++stats.non_finite;
+    }
+  }
+  return stats;
+}
+
+void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
+  if (!isValidKey(lo)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", lo);
+  if (!isValidKey(hi)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", hi);
+  if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z)
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box " + toString(lo) + " to " +
+                                toString(hi) + " is empty");
+  const std::uint64_t sx = std::uint64_t(hi.x - lo.x) + 1, sy = std::uint64_t(hi.y - lo.y) + 1,
+                      sz = std::uint64_t(hi.z - lo.z) + 1;
+  if ((unsigned __int128)(sx * sy) * sz >= (unsigned __int128)1 << 60)
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box holds 2^60 cells or more");
+  const TreeCoord l(lo), h(hi);
+  // Split the smallest aligned cube holding the box down to the cubes inside it.
+  auto split = [&](auto& self, const TreeCoord& c, unsigned level) -> void {
+    const std::uint64_t last = (std::uint64_t(1) << level) - 1;
+    bool inside = true;
+    for (unsigned a = 0; a < 3; ++a) {
+      if (c[a] > h[a] || c[a] + last < l[a]) return;
+      inside = inside && c[a] >= l[a] && c[a] + last <= h[a];
+    }
+    if (inside) {
+      setCube(c, level, state);
+      return;
+    }
+    for (unsigned o = 0; o < 8; ++o) self(self, c.child(o, level - 1), level - 1);
+  };
+  const unsigned top = commonLevel(l, h);
+  split(split, l.corner(top), top);
+}
+
+void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
+  if (level == 0) {
+    Accessor(*this, false).setValidCell(c.key(), state);
+    return;
+  }
+  const std::uint32_t x = c[0], y = c[1], z = c[2];
+  const std::uint32_t apart = (x ^ base_[0]) | (y ^ base_[1]) | (z ^ base_[2]);
+  const bool cube_in_root = level <= root_level_ && (apart >> root_level_) == 0;
+  const bool root_in_cube = root_level_ <= level && (apart >> level) == 0;
+  if (!cube_in_root) {
+    if (state == CellState::Unknown) {  // nothing is known outside the root
+      if (root_in_cube) {
+        ++version_;
+        releaseSubtree(words_[0], root_level_);
+        words_[0] = node::uniform(CellState::Unknown);
+      }
+      return;
+    }
+    if (empty()) {  // nothing to keep: the cube becomes the root
+      ++version_;
+      root_level_ = level;
+      base_ = c;
+    } else {
+      growToCover(x, y, z, level);
+    }
+  }
+  const std::uint64_t cells = node::cellsIn(1, level);
+  ++version_;
+  if (level == root_level_) {  // the cube is the root
+    releaseSubtree(words_[0], root_level_);
+    words_[0] = node::uniform(state);
+    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    return;
+  }
+  std::size_t path[kMaxLevel + 1];
+  path[root_level_] = 0;
+  unsigned l = root_level_;
+  for (; l > level + 1 && !node::isBitmap(words_[path[l]]); --l)
+    path[l - 1] = node::childOffset(words_[path[l]], c.octant(l));
+  if (l > level + 1) {  // from this bitmap word down to the cube's parent, each level takes a block
+    if (node::state(words_[path[l]], c.octant(l)) == state) return;  // inside such a cube
+    reserveBlocks(l - level - 1);
+  }
+  for (; l > level + 1; --l) {
+    const NodeWord w = words_[path[l]];
+    const std::size_t first = std::size_t(allocBlock()) * 8;
+    for (unsigned i = 0; i < 8; ++i) words_[first + i] = node::uniform(node::state(w, i));
+    words_[path[l]] = node::reference(std::uint32_t(first / 8));
+    path[l - 1] = first + c.octant(l);
+  }
+  const unsigned o = c.octant(level + 1);
+  const NodeWord parent = words_[path[level + 1]];
+  if (node::isBitmap(parent)) {  // the cube is one of its octants
+    const CellState old = node::state(parent, o);
+    if (old == state) return;
+    if (old != CellState::Unknown) counts_[std::size_t(old)] -= cells;
+    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    words_[path[level + 1]] = node::withState(parent, o, state);
+    if (node::isUniform(words_[path[level + 1]])) collapseFrom(path, level + 1);
+    return;
+  }
+  path[level] = node::childOffset(parent, o);
+  releaseSubtree(words_[path[level]], level);
+  words_[path[level]] = node::uniform(state);
+  if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+  collapseFrom(path, level);
+}
+
+void FastOctTree::releaseSubtree(NodeWord w, unsigned level) {
+  if (node::isBitmap(w)) {
+    for (CellState s : {CellState::Free, CellState::Occupied})
+      counts_[std::size_t(s)] -= node::cellsIn(node::popcount(node::octantMask(w, s)), level - 1);
+    return;
+  }
+  for (unsigned o = 0; o < 8; ++o) releaseSubtree(words_[node::childOffset(w, o)], level - 1);
+  freeBlock(node::block(w));
+}
+
+void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {
+  max_bytes_ = bytes;
+}
+
+void FastOctTree::reserveBlocks(std::size_t n) {
+  if (n <= free_blocks_) return;
+  const std::size_t fresh = n - free_blocks_;
+  const std::size_t blocks = words_.size() / 8 + fresh;
+  const std::size_t bytes = blocks * 8 * sizeof(NodeWord);
+  if (bytes > max_bytes_)
+    throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
+                           " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");
+  if (blocks > node::kMaxBlocks)
+    throw MemoryLimitError("pcl::fot::FastOctTree: the pool would exceed 2^31 blocks");
+  if (blocks * 8 > words_.capacity()) {
+    const std::size_t cap_words = max_bytes_ / sizeof(NodeWord);
+    words_.reserve(std::max(blocks * 8, std::min(words_.capacity() * 2, cap_words)));
+  }
+}
+
+std::uint32_t FastOctTree::allocBlock() {
+  ++live_blocks_;
+  if (free_head_ != kNoBlock) {
+    const std::uint32_t block = free_head_;
+    free_head_ = words_[std::size_t(block) * 8];
+    --free_blocks_;
+    return block;
+  }
+  const std::uint32_t block = std::uint32_t(words_.size() / 8);
+  words_.resize(words_.size() + 8);  // within the capacity reserveBlocks made
+  return block;
+}
+
+void FastOctTree::freeBlock(std::uint32_t block) {
+  words_[std::size_t(block) * 8] = free_head_;
+  free_head_ = block;
+  ++free_blocks_;
+  --live_blocks_;
+}
+
+void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
+  ++version_;
+  if (empty()) {  // nothing to keep: re-anchor a small root at the key
+    root_level_ = 1;
+    base_ = TreeCoord(x, y, z).corner(1);
+    return;
+  }
+  const std::uint32_t far = (std::uint32_t(1) << level) - 1;  // the cube's corners differ in these bits only
+  const unsigned target = tree_coord::commonLevel(((x | far) ^ base_[0]) | (x ^ base_[0]),
+                                                  ((y | far) ^ base_[1]) | (y ^ base_[1]),
+                                                  ((z | far) ^ base_[2]) | (z ^ base_[2]));
+  // Growth takes a block per level, but a uniform root folds into its parent's bitmap for free. The write
+  // then builds the path from the new root down to the cube's parent, below the new root's block if there
+  // is one. Reserving both first keeps a refused write from leaving the root grown.
+  const std::size_t growth = target - root_level_ - (node::isUniform(words_[0]) ? 1 : 0);
+  const std::size_t path = target > level + 1 ? target - level - (growth > 0 ? 2 : 1) : 0;
+  reserveBlocks(growth + path);
+  while (root_level_ < target) {
+    const NodeWord root = words_[0];
+    const unsigned octant = base_.octant(root_level_ + 1);
+    if (node::isUniform(root)) {
+      // A uniform root folds straight into one octant of its parent: no block needed.
+      words_[0] = node::withState(node::uniform(CellState::Unknown), octant, node::uniformState(root));
+    } else {
+      const std::uint32_t block = allocBlock();
+      const std::size_t first = std::size_t(block) * 8;
+      std::fill_n(words_.begin() + first, 8, node::uniform(CellState::Unknown));
+      words_[first + octant] = root;
+      words_[0] = node::reference(block);
+    }
+    ++root_level_;
+    base_ = base_.corner(root_level_);
+  }
+}
+
+void FastOctTree::expandTo(std::size_t* path, unsigned level, std::uint32_t x, std::uint32_t y,
+                           std::uint32_t z) {
+  reserveBlocks(level - 1);
+  ++version_;
+  NodeWord w = words_[path[level]];
+  while (level > 1) {
+    const std::uint32_t block = allocBlock();
+    const std::size_t first = std::size_t(block) * 8;
+    for (unsigned o = 0; o < 8; ++o) words_[first + o] = node::uniform(node::state(w, o));
+    words_[path[level]] = node::reference(block);
+    const std::size_t at = first + tree_coord::octant(x, y, z, level);
+    path[--level] = at;
+    w = words_[at];
+  }
+}
+
+unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
+  NodeWord& leaf = words_[path[1]];
+  for (CellState s : {CellState::Free, CellState::Occupied}) {
+    counts_[std::size_t(s)] += node::popcount(node::octantMask(updated, s));
+    counts_[std::size_t(s)] -= node::popcount(node::octantMask(leaf, s));
+  }
+  leaf = updated;
+  return node::isUniform(updated) ? collapseFrom(path, 1) : 1;
+}
+
+unsigned FastOctTree::collapseFrom(const std::size_t* path, unsigned level) {
+  while (level < root_level_) {
+    const std::size_t first = path[level] & ~std::size_t(7);
+    NodeWord parent = node::kBitmapTag;
+    for (unsigned o = 0; o < 8; ++o) {
+      const NodeWord w = words_[first + o];
+      if (!node::isUniform(w)) return level;
+      parent |= NodeWord(node::uniformState(w)) << (node::kStateShift + 2 * o);
+    }
+    words_[path[level + 1]] = parent;
+    freeBlock(std::uint32_t(first / 8));
+    ++version_;
+    ++level;
+    if (!node::isUniform(parent)) return level;
+  }
+  return level;
+}
+
+void FastOctTree::clear() {
+  std::vector<NodeWord>(8, 0).swap(words_);
+  words_[0] = node::uniform(CellState::Unknown);
+  root_level_ = 1;
+  base_ = TreeCoord();
+  free_head_ = kNoBlock;
+  free_blocks_ = 0;
+  live_blocks_ = 0;
+  counts_ = {0, 0, 0};
+  ++version_;
+}
+
+NodeView FastOctTree::contentRoot() const {
+  NodeView n = root();
+  while (n.level > 1) {
+    unsigned only = 8;
+    for (unsigned o = 0; o < 8; ++o) {
+      if (NodeView::childWord(words_.data(), n.word, o) == node::uniform(CellState::Unknown)) continue;
+      if (only != 8) return n;
+      only = o;
+    }
+    if (only == 8) return n;  // empty
+    n = n.child(words_.data(), only);
+  }
+  return n;
+}
+
+namespace {
+
+bool sameSubtree(const FastOctTree& a, NodeWord wa, const FastOctTree& b, NodeWord wb) {
+  if (node::isBitmap(wa) || node::isBitmap(wb)) return wa == wb;
+  for (unsigned o = 0; o < 8; ++o)
+    if (!sameSubtree(a, a.words()[node::childOffset(wa, o)], b, b.words()[node::childOffset(wb, o)]))
+      return false;
+  return true;
+}
+
+}  // namespace
+
+bool FastOctTree::operator==(const FastOctTree& other) const {
+  if (grid_ != other.grid_ || counts_ != other.counts_) return false;
+  if (empty() || other.empty()) return empty() == other.empty();
+  const NodeView a = contentRoot(), b = other.contentRoot();
+  return a.level == b.level && a.corner == b.corner && sameSubtree(*this, a.word, other, b.word);
+}
+
+}  // namespace fot
+}  // namespace pcl
