@@ -12,9 +12,10 @@ CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo 
   -DPCL_FOT_BUILD_TOOLS=OFF -DPCL_FOT_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
 cmake --build build-fuzz -j2 --target fuzz_fot_loader fuzz_bt_import fuzz_ot_import fuzz_scan_insertion \
-  fuzz_cloud_parser fuzz_point_index fuzz_psi fuzz_tree_ops fuzz_octree_point_cloud
+  fuzz_cloud_parser fuzz_point_index fuzz_psi fuzz_tree_ops fuzz_octree_point_cloud fuzz_options
 
-for target in fot_loader bt_import ot_import scan_insertion cloud_parser point_index psi tree_ops octree_point_cloud; do
+for target in fot_loader bt_import ot_import scan_insertion cloud_parser point_index psi tree_ops octree_point_cloud \
+  options; do
   echo "== fuzzing $target for $seconds s"
   work=build-fuzz/corpus/$target findings=build-fuzz/findings/$target
   rm -rf "$findings"

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -37,6 +38,23 @@ void printHelp(const char* prog) {
       prog);
 }
 
+/** The -sections list: known names, each at most once, at least one. */
+std::set<std::string> sectionList(const std::string& text) {
+  const std::set<std::string> known{"cells", "rays", "search", "algorithms", "psi"};
+  std::set<std::string> chosen;
+  std::stringstream in(text);
+  for (std::string name; std::getline(in, name, ',');) {
+    if (!known.count(name))
+      throw ToolError(kExitUsage,
+                      "option -sections: '" + name + "' is none of cells,rays,search,algorithms,psi");
+    if (!chosen.insert(name).second)
+      throw ToolError(kExitUsage, "option -sections names '" + name + "' twice");
+  }
+  if (chosen.empty() || text.back() == ',')
+    throw ToolError(kExitUsage, "option -sections: an empty section name");
+  return chosen;
+}
+
 std::string firstLineOf(const char* path, const char* key) {
   std::ifstream in(path);
   std::string line;
@@ -48,11 +66,11 @@ std::string firstLineOf(const char* path, const char* key) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_bench", [&] {
+  return runTool("fot_bench", "fot_bench [options]", [&] {
     const Arguments args(argc, argv,
                          {"-data", "-out", "-repeats", "-ray_repeats", "-dmap_repeats", "-sections"},
-                         {"-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+                         {"-h", "--help"}, 0, 0);
+    if (args.helpAsked()) {
       printHelp("fot_bench");
       return kExitOk;
     }
@@ -65,12 +83,15 @@ int main(int argc, char** argv) {
     args.get("-ray_repeats", ray_repeats);
     args.get("-dmap_repeats", dmap_repeats);
     args.get("-sections", sections);
-    requireWritableDirectory(out);
     if (repeats < 1 || ray_repeats < 1 || dmap_repeats < 1)
       throw ToolError(kExitUsage, "-repeats, -ray_repeats and -dmap_repeats must be at least 1");
-    auto wanted = [&](const std::string& s) {
-      return ("," + sections + ",").find("," + s + ",") != std::string::npos;
-    };
+    const std::set<std::string> chosen = sectionList(sections);
+    auto wanted = [&](const std::string& s) { return chosen.count(s) != 0; };
+    requireWritableDirectory(out);
+    const std::string doc_dir = out.find('/') == std::string::npos ? "." : out.substr(0, out.rfind('/'));
+    const std::string plot = doc_dir + "/psi_random_maps.png";
+    refuseOverwrites(fot_bench::benchScanFiles(data_dir),
+                     {out, plot, plot + ".dat", plot + ".gp", plot + ".tmp"});
     TicToc total;
     total.tic();
     const auto scans = fot_bench::loadBenchScans(data_dir);
@@ -92,9 +113,7 @@ int main(int argc, char** argv) {
     if (wanted("rays")) md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
     if (wanted("search")) md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
     if (wanted("algorithms")) md << fot_bench::benchPclAlgorithms(scans, ray_repeats) << "\n";
-    const std::string doc_dir = out.find('/') == std::string::npos ? "." : out.substr(0, out.rfind('/'));
-    if (wanted("psi"))
-      md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, doc_dir + "/psi_random_maps.png") << "\n";
+    if (wanted("psi")) md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, plot) << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
     return kExitOk;

@@ -47,6 +47,34 @@ pcl::fot::io::VoxelColoring coloring(const Arguments& args, const std::string& o
   throw ToolError(kExitUsage, "option -color takes height, state or none (.pcd only)");
 }
 
+/**
+ * Says why points lie beyond the keys, which reach 2^29 cells either side of the origin, and what can work:
+ * a coarser resolution when the cloud is wider than the keys reach, else an origin at its centre
+ * (georeferenced data, usually).
+ */
+void adviseOnRange(const pcl::PointCloud<pcl::PointXYZ>& cloud, double res, std::size_t beyond) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (const auto& p : cloud)
+    if (pcl::isFinite(p)) {
+      lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
+      hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
+    }
+  const double span = (hi - lo).maxCoeff(), reach = std::ldexp(res, 30);
+  if (span >= reach) {
+    print_warn(
+        "%zu points lie beyond the map's cells: the cloud spans %g m, more than the 2^30 cells of %g m a map "
+        "holds per axis; give a coarser -res (%g m or more)\n",
+        beyond, span, res, std::ldexp(span, -30) * 1.01);
+    return;
+  }
+  const Eigen::Vector3d centre = (lo + hi) / 2;
+  auto tidy = [](double v) { return std::abs(v) < 0.5 ? 0.0 : v; };  // "0", not "-0"
+  print_warn(
+      "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
+      "%.0f,%.0f,%.0f\n",
+      beyond, tidy(centre.x()), tidy(centre.y()), tidy(centre.z()));
+}
+
 /** A map of a point cloud's points, no ray tracing; names an origin that fits when points lie beyond it. */
 pcl::fot::FastOctTree mapOfCloud(const std::string& input, const Arguments& args,
                                  const std::vector<double>& origin) {
@@ -59,19 +87,7 @@ pcl::fot::FastOctTree mapOfCloud(const std::string& input, const Arguments& args
   const pcl::fot::InsertStats st = pcl::fot::insertPointCloud(tree, *cloud);
   print_info("Inserted %zu points (skipped %zu NaN/Inf, %zu out of range)\n", st.inserted, st.non_finite,
              st.out_of_range);
-  if (st.out_of_range > 0) {  // georeferenced data, usually: the keys reach 2^29 cells from the origin
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (const auto& p : *cloud)
-      if (pcl::isFinite(p)) {
-        lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
-        hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
-      }
-    const Eigen::Vector3d centre = (lo + hi) / 2;
-    print_warn(
-        "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
-        "%.0f,%.0f,%.0f\n",
-        st.out_of_range, centre.x(), centre.y(), centre.z());
-  }
+  if (st.out_of_range > 0) adviseOnRange(*cloud, res, st.out_of_range);
   return tree;
 }
 
@@ -108,15 +124,14 @@ std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& ou
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_convert", [&] {
-    const Arguments args(argc, argv, {"-res", "-origin", "-color"}, {"-free", "-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+  return runTool("fot_convert", "fot_convert input output [options]", [&] {
+    const Arguments args(argc, argv, {"-res", "-origin", "-color"}, {"-free", "-h", "--help"}, 2, 2);
+    if (args.helpAsked()) {
       printHelp("fot_convert");
       return kExitOk;
     }
-    if (args.positional().size() != 2)
-      throw ToolError(kExitUsage, "expected an input and an output file (see -h)");
     const std::string &input = args.positional()[0], &output = args.positional()[1];
+    refuseOverwrites({input}, {output});
     const std::string out_ext = extension(output);
     if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".pcd" && out_ext != ".vtk")
       throw ToolError(kExitUsage,

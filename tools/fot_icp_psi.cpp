@@ -53,17 +53,20 @@ void printHelp(const char* prog) {
  * of an organised cloud (its kd-tree asserts on them), nor a cloud without finite points (it would crash in
  * getFitnessScore).
  */
-Cloud::Ptr registrationInput(const std::string& file, double leaf) {
+Cloud::Ptr registrationInput(const std::string& file, float leaf) {
   const Cloud::Ptr loaded = loadCloud(file);
   Cloud::Ptr cloud(new Cloud);
   std::copy_if(loaded->begin(), loaded->end(), std::back_inserter(*cloud),
                [](const pcl::PointXYZ& p) { return pcl::isFinite(p); });
   if (cloud->empty()) throw ToolError(kExitInput, "'" + file + "' has no finite points to register");
+  if (cloud->size() < loaded->size())
+    print_warn("'%s': %zu of %zu points dropped (NaN/Inf)\n", file.c_str(), loaded->size() - cloud->size(),
+               loaded->size());
   if (leaf > 0) {
     Cloud::Ptr filtered(new Cloud);
     pcl::VoxelGrid<pcl::PointXYZ> grid;
     grid.setInputCloud(cloud);
-    grid.setLeafSize(float(leaf), float(leaf), float(leaf));
+    grid.setLeafSize(leaf, leaf, leaf);
     grid.filter(*filtered);
     cloud = filtered;
   }
@@ -73,18 +76,17 @@ Cloud::Ptr registrationInput(const std::string& file, double leaf) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_icp_psi", [&] {
+  return runTool("fot_icp_psi", "fot_icp_psi source.pcd|.ply target.pcd|.ply [options]", [&] {
     const Arguments args(argc, argv, {"-guess", "-leaf", "-res", "-max_range", "-max_corr", "-iterations"},
-                         {"-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+                         {"-h", "--help"}, 2, 2);
+    if (args.helpAsked()) {
       printHelp("fot_icp_psi");
       return kExitOk;
     }
-    if (args.positional().size() != 2)
-      throw ToolError(kExitUsage, "expected a source and a target point cloud (see -h)");
     std::vector<double> guess{0, 0, 0, 0};
-    args.get("-guess", guess, 4);
-    double leaf = 0.1, res = 0.1, max_range = 1.0, max_corr = 0.5;
+    args.get("-guess", guess, 4, true);
+    float leaf = 0.1f;
+    double res = 0.1, max_range = 1.0, max_corr = 0.5;
     int iterations = 50;
     if (args.get("-leaf", leaf) && leaf < 0) throw ToolError(kExitUsage, "option -leaf must not be negative");
     args.getResolution(res);

@@ -55,14 +55,12 @@ void describe(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_info", [&] {
-    const Arguments args(argc, argv, {}, {"-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+  return runTool("fot_info", "fot_info map.fot|map.bt|map.ot [more maps ...]", [&] {
+    const Arguments args(argc, argv, {}, {"-h", "--help"}, 1);
+    if (args.helpAsked()) {
       printHelp("fot_info");
       return kExitOk;
     }
-    if (args.positional().empty())
-      throw ToolError(kExitUsage, "expected one or more .fot, .bt or .ot maps (see -h)");
     for (const std::string& path : args.positional()) describe(path);
     return kExitOk;
   });

@@ -160,6 +160,13 @@ pcl::fot::ScanStats mapScans(pcl::fot::FastOctTree& tree, const std::vector<Clou
   return total;
 }
 
+/** The files fot_map writes for the output prefix `out`. */
+std::vector<std::string> outputFiles(const std::string& out, bool with_free) {
+  std::vector<std::string> files{out + ".fot", out + "_occupied.pcd", out + "_mesh.vtk"};
+  if (with_free) files.push_back(out + "_states.pcd");
+  return files;
+}
+
 /** Writes the map and its viewer files, and prints what they hold. */
 void writeOutputs(const pcl::fot::FastOctTree& tree, const std::string& out, bool with_free,
                   std::size_t scans, const pcl::fot::ScanStats& total) {
@@ -195,10 +202,10 @@ void writeOutputs(const pcl::fot::FastOctTree& tree, const std::string& out, boo
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_map", [&] {
+  return runTool("fot_map", "fot_map [options] [scan1.pcd|.ply scan2.pcd ...]", [&] {
     const Arguments args(argc, argv, {"-res", "-poses", "-max_range", "-min_range", "-out"},
                          {"-free", "-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+    if (args.helpAsked()) {
       printHelp("fot_map");
       return kExitOk;
     }
@@ -212,6 +219,9 @@ int main(int argc, char** argv) {
     args.get("-out", out);
     const bool with_poses = args.get("-poses", pose_file);
     requireWritableDirectory(out + ".fot");
+    std::vector<std::string> inputs = args.positional(), outputs = outputFiles(out, args.has("-free"));
+    if (with_poses) inputs.push_back(pose_file);
+    refuseOverwrites(inputs, outputs);
 
     TicToc timer;
     timer.tic();

@@ -47,16 +47,34 @@ std::string describe(const pcl::fot::CellGrid& grid) {
   return text;
 }
 
+/**
+ * Reports the points of a cloud that did not become cells, and refuses a cloud that kept fewer than half
+ * of them: ψ would describe a remnant, and read as a good score.
+ */
+void checkKept(const char* which, const std::string& path, std::size_t points,
+               const pcl::fot::InsertStats& st) {
+  const std::size_t dropped = st.non_finite + st.out_of_range;
+  if (dropped == 0) return;
+  print_warn("%s ('%s'): %zu of %zu points dropped (%zu NaN/Inf, %zu beyond the map's 2^29 cells)\n", which,
+             path.c_str(), dropped, points, st.non_finite, st.out_of_range);
+  if (st.inserted < st.out_of_range)
+    throw ToolError(kExitInput, std::string(which) + " ('" + path + "') keeps " +
+                                    std::to_string(st.inserted) + " of its " +
+                                    std::to_string(st.inserted + st.out_of_range) +
+                                    " finite points; the rest lie beyond the map's cells (a coarser -res "
+                                    "reaches further): psi of the remnant would mislead");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  return runTool("fot_psi", [&] {
-    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads"}, {"-free", "-h", "--help"});
-    if (args.has("-h") || args.has("--help")) {
+  return runTool("fot_psi", "fot_psi a b [options]", [&] {
+    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads"}, {"-free", "-h", "--help"}, 2,
+                         2);
+    if (args.helpAsked()) {
       printHelp("fot_psi");
       return kExitOk;
     }
-    if (args.positional().size() != 2) throw ToolError(kExitUsage, "expected two clouds or maps (see -h)");
     double res = 0.05;
     args.getResolution(res);
     pcl::fot::PsiOptions options;
@@ -72,7 +90,7 @@ int main(int argc, char** argv) {
       options.threads = unsigned(threads);
     }
     std::vector<double> t;
-    const bool transformed = args.get("-transform", t, 6);
+    const bool transformed = args.get("-transform", t, 6, true);
 
     // A point cloud takes the grid of a map beside it, unless -res is given; two clouds take -res.
     const std::string paths[2] = {args.positional()[0], args.positional()[1]};
@@ -93,12 +111,16 @@ int main(int argc, char** argv) {
         pcl::transformPointCloud(*cloud, *cloud, pose);
       }
       maps[i].emplace(cloud_grid);
-      pcl::fot::insertPointCloud(*maps[i], *cloud);
+      checkKept(i == 0 ? "a" : "b", paths[i], cloud->size(), pcl::fot::insertPointCloud(*maps[i], *cloud));
     }
     const pcl::fot::FastOctTree &a = *maps[0], &b = *maps[1];
     if (a.getGrid() != b.getGrid())
       throw ToolError(kExitInput, "the maps must share their grid: a has " + describe(a.getGrid()) + ", b " +
                                       describe(b.getGrid()));
+    for (int i = 0; i < 2; ++i)
+      if (maps[i]->getOccupiedCount() == 0)
+        throw ToolError(kExitInput, std::string(i == 0 ? "a" : "b") + " ('" + paths[i] +
+                                        "') has no occupied cell: there is nothing to compare");
     TicToc timer;
     timer.tic();
     const pcl::fot::PsiResult r = pcl::fot::psi(a, b, options);

@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -15,82 +14,34 @@
 #include <pcl_fot/io/octomap.h>
 
 namespace fot_tools {
-namespace {
-
-bool looksLikeNumber(const std::string& s) {
-  char* end = nullptr;
-  std::strtod(s.c_str(), &end);
-  return end != s.c_str() && *end == '\0';
-}
-
-}  // namespace
-
-Arguments::Arguments(int argc, char** argv, std::set<std::string> valued, std::set<std::string> switches)
-    : argc_(argc), argv_(argv) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a.size() > 1 && a[0] == '-' && !looksLikeNumber(a)) {
-      if (valued.count(a)) {
-        if (i + 1 >= argc) throw ToolError(kExitUsage, "option " + a + " needs a value (see -h)");
-        ++i;
-      } else if (!switches.count(a)) {
-        throw ToolError(kExitUsage, "unknown option " + a + " (see -h)");
-      }
-      continue;
+void refuseOverwrites(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+  struct Identity {
+    dev_t device;
+    ino_t inode;
+    bool operator==(const Identity& o) const { return device == o.device && inode == o.inode; }
+  };
+  auto identity = [](const std::string& path, Identity& id) {
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) return false;  // follows links; a file yet to be made is no input
+    id = Identity{st.st_dev, st.st_ino};
+    return true;
+  };
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    Identity out;
+    if (!identity(outputs[o], out)) continue;
+    for (const std::string& input : inputs) {
+      Identity in;
+      if (identity(input, in) && in == out)
+        throw ToolError(kExitUsage, "the output '" + outputs[o] + "' is the input '" + input +
+                                        "' (the same file): it would be overwritten");
     }
-    positional_.push_back(a);
+    for (std::size_t other = 0; other < o; ++other) {
+      Identity id;
+      if (identity(outputs[other], id) && id == out)
+        throw ToolError(kExitUsage,
+                        "the outputs '" + outputs[other] + "' and '" + outputs[o] + "' are the same file");
+    }
   }
-}
-
-bool Arguments::get(const std::string& name, double& value) const {
-  if (pcl::console::find_argument(argc_, argv_, name.c_str()) < 0) return false;
-  if (pcl::console::parse_argument(argc_, argv_, name.c_str(), value) < 0 || !std::isfinite(value))
-    throw ToolError(kExitUsage, "option " + name + " needs a finite number");
-  return true;
-}
-
-bool Arguments::get(const std::string& name, int& value) const {
-  if (pcl::console::find_argument(argc_, argv_, name.c_str()) < 0) return false;
-  if (pcl::console::parse_argument(argc_, argv_, name.c_str(), value) < 0)
-    throw ToolError(kExitUsage, "option " + name + " needs a whole number");
-  return true;
-}
-
-bool Arguments::get(const std::string& name, std::string& value) const {
-  return pcl::console::parse_argument(argc_, argv_, name.c_str(), value) >= 0;
-}
-
-bool Arguments::get(const std::string& name, std::vector<double>& values, std::size_t count) const {
-  std::string text;
-  if (!get(name, text)) return false;
-  values.clear();
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(v))
-      throw ToolError(kExitUsage,
-                      "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
-    values.push_back(v);
-  }
-  if (values.size() != count)
-    throw ToolError(kExitUsage,
-                    "option " + name + " takes " + std::to_string(count) + " comma-separated numbers");
-  return true;
-}
-
-bool Arguments::getPositive(const std::string& name, double& value) const {
-  if (!get(name, value)) return false;
-  if (!(value > 0)) throw ToolError(kExitUsage, "option " + name + " must be positive");
-  return true;
-}
-
-bool Arguments::getResolution(double& value) const {
-  if (!getPositive("-res", value)) return false;
-  const std::string why = pcl::fot::CellGrid::whyInvalid(value, 0.0, 0.0, 0.0);
-  if (!why.empty()) throw ToolError(kExitUsage, "option -res: " + why);
-  return true;
 }
 
 std::string extension(const std::string& path) {

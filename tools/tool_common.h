@@ -1,56 +1,25 @@
 #pragma once
-// What the command-line tools share: PCL-style option checks, inputs by file extension, exit codes.
+// What the command-line tools share: inputs by file extension, output checks, how a tool reports errors.
 
 #include <new>
-#include <set>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
 #include <pcl_fot/tree/fast_oct_tree.h>
 
+#include "arguments.h"
+
 namespace fot_tools {
 
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 1;  ///< bad arguments
-constexpr int kExitInput = 2;  ///< a file that cannot be read, is not valid, or cannot be written
-
-/** A one-line message for the user; the tool prints it and exits with `code`. */
-struct ToolError : std::runtime_error {
-  ToolError(int exit_code, const std::string& what) : std::runtime_error(what), code(exit_code) {}
-  int code;
-};
-
 /**
- * The command line, checked the way PCL's tools read it (pcl::console): options with a value, switches,
- * and the rest positional. Unknown options, missing values and unparsable numbers throw ToolError.
+ * Throws ToolError (kExitUsage) if an output is one of the inputs or another output: the same file, by device
+ * and inode after following links, however it is spelt. Outputs that do not exist yet are none of them.
  */
-class Arguments {
- public:
-  Arguments(int argc, char** argv, std::set<std::string> valued, std::set<std::string> switches);
-
-  bool has(const std::string& name) const { return pcl::console::find_switch(argc_, argv_, name.c_str()); }
-  /** The option's value, if given; throws ToolError if it does not parse. */
-  bool get(const std::string& name, double& value) const;
-  bool get(const std::string& name, int& value) const;
-  bool get(const std::string& name, std::string& value) const;
-  /** Comma-separated numbers, exactly `count` of them. */
-  bool get(const std::string& name, std::vector<double>& values, std::size_t count) const;
-  /** A positive, finite value, if given. */
-  bool getPositive(const std::string& name, double& value) const;
-  /** -res, if given: a resolution CellGrid accepts, with cell centres that are floats. */
-  bool getResolution(double& value) const;
-  const std::vector<std::string>& positional() const { return positional_; }
-
- private:
-  int argc_;
-  char** argv_;
-  std::vector<std::string> positional_;
-};
+void refuseOverwrites(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs);
 
 /** The file's extension, lower case, with the dot: ".pcd". */
 std::string extension(const std::string& path);
@@ -79,13 +48,19 @@ pcl::fot::FastOctTree loadMap(const std::string& path);
 /** True for the extensions loadMap reads. */
 bool isMapFile(const std::string& path);
 
-/** Runs a tool's body: prints a ToolError or any other exception as one line, and returns the exit code. */
+/**
+ * Runs a tool's body: prints a ToolError or any other exception as one line, a usage error with the tool's
+ * `syntax` ("fot_psi a b [options]"), and returns the exit code.
+ */
 template <typename Body>
-int runTool(const char* tool, Body&& body) {
+int runTool(const char* tool, const char* syntax, Body&& body) {
   try {
     return body();
   } catch (const ToolError& e) {
-    pcl::console::print_error("%s: %s\n", tool, e.what());
+    if (e.code == kExitUsage)
+      pcl::console::print_error("%s: %s (usage: %s; -h for help)\n", tool, e.what(), syntax);
+    else
+      pcl::console::print_error("%s: %s\n", tool, e.what());
     return e.code;
   } catch (const std::bad_alloc&) {
     pcl::console::print_error("%s: out of memory\n", tool);

@@ -4,10 +4,13 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -19,25 +22,83 @@ namespace {
 [[noreturn]] void fail(const std::string& what, const std::string& path, int err) {
   throw std::runtime_error("pcl::fot::io: cannot " + what + " '" + path + "': " + std::strerror(err));
 }
-}  // namespace
 
-void writeFileAtomically(const std::string& path, const std::string& bytes) {
-  // Unique per process and per call, so that threads saving the same path do not share a temporary file.
-  static std::atomic<std::uint64_t> calls{0};
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(calls++);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) fail("create", tmp, errno);
+/** Writes all of `bytes` to fd; the errno of a failure, or 0. */
+int writeAll(int fd, const std::string& bytes) {
   std::size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int err = errno;
-      ::close(fd);
-      std::remove(tmp.c_str());
-      fail("write", tmp, err);
-    }
+    if (n <= 0) return n < 0 ? errno : EIO;
     done += std::size_t(n);
+  }
+  return 0;
+}
+
+/** A device or pipe, written as a stream. O_NONBLOCK only to open: a pipe without a reader must not hang. */
+void writeStream(const std::string& path, const std::string& bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) fail("open", path, errno);
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  const int written = writeAll(fd, bytes);
+  const int closed = ::close(fd) == 0 ? 0 : errno;
+  if (written || closed) fail("write", path, written ? written : closed);
+}
+
+/** The folder and name of a path: "a/b.fot" -> "a", "b.fot". */
+void splitPath(const std::string& path, std::string& dir, std::string& name) {
+  const std::size_t slash = path.find_last_of('/');
+  dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  name = slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+/** Removes the temporary files of `name` in `dir` whose writer is no longer alive. */
+void removeStaleTemporaries(const std::string& dir, const std::string& name) {
+  const std::string prefix = "." + name + ".pcl_fot-tmp.";
+  DIR* d = ::opendir(dir.c_str());
+  if (!d) return;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string entry = e->d_name;
+    if (entry.compare(0, prefix.size(), prefix) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(entry.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || *end != '.') continue;
+    if (::kill(pid_t(pid), 0) != 0 && errno == ESRCH) ::unlink((dir + "/" + entry).c_str());
+  }
+  ::closedir(d);
+}
+
+}  // namespace
+
+void writeFileAtomically(const std::string& path, const std::string& bytes) {
+  std::string target = path;
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) fail("write", path, EISDIR);
+    if (!S_ISREG(st.st_mode)) {
+      writeStream(path, bytes);
+      return;
+    }
+    // Through a link, the temporary file goes beside the file it names, and the link stays.
+    if (char* real = ::realpath(path.c_str(), nullptr)) {
+      target = real;
+      std::free(real);
+    }
+  }
+  std::string dir, name;
+  splitPath(target, dir, name);
+  removeStaleTemporaries(dir, name);
+  // Unique per process and per call, so that threads saving the same path do not share a temporary file.
+  static std::atomic<std::uint64_t> calls{0};
+  const std::string tmp =
+      dir + "/." + name + ".pcl_fot-tmp." + std::to_string(::getpid()) + "." + std::to_string(calls++);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) fail("create", tmp, errno);
+  const int written = writeAll(fd, bytes);
+  if (written) {
+    ::close(fd);
+    std::remove(tmp.c_str());
+    fail("write", tmp, written);
   }
   const int synced = ::fsync(fd) == 0 ? 0 : errno;
   const int closed = ::close(fd) == 0 ? 0 : errno;
@@ -45,10 +106,10 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
     std::remove(tmp.c_str());
     fail("flush", tmp, synced ? synced : closed);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (std::rename(tmp.c_str(), target.c_str()) != 0) {
     const int err = errno;
     std::remove(tmp.c_str());
-    fail("rename to", path, err);
+    fail("rename to", target, err);
   }
 }
 

@@ -40,9 +40,9 @@ void collectPieces(const NodeWord* words, const NodeView& n, CellState v, std::v
     return;
   }
   for (unsigned o = 0; o < 8; ++o) {
-    const NodeView child = n.child(words, o);
-    if (child.isBitmap() && !node::holds(child.word, v)) continue;  // most, in sparse maps
-    collectPieces(words, child, v, out);
+    const NodeWord child = NodeView::childWord(words, n.word, o);
+    if (node::isBitmap(child) && !node::holds(child, v)) continue;  // most, in sparse maps
+    collectPieces(words, NodeView{child, n.level - 1, n.corner.child(o, n.level - 1)}, v, out);
   }
 }
 

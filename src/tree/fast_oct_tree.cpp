@@ -276,16 +276,6 @@ void FastOctTree::expandTo(std::size_t* path, unsigned level, std::uint32_t x, s
   }
 }
 
-unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
-  NodeWord& leaf = words_[path[1]];
-  for (CellState s : {CellState::Free, CellState::Occupied}) {
-    counts_[std::size_t(s)] += node::popcount(node::octantMask(updated, s));
-    counts_[std::size_t(s)] -= node::popcount(node::octantMask(leaf, s));
-  }
-  leaf = updated;
-  return node::isUniform(updated) ? collapseFrom(path, 1) : 1;
-}
-
 unsigned FastOctTree::collapseFrom(const std::size_t* path, unsigned level) {
   while (level < root_level_) {
     const std::size_t first = path[level] & ~std::size_t(7);

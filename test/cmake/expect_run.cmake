@@ -1,7 +1,10 @@
 # Runs a tool as a user would and checks what it did. Usage (the command follows "--"):
-#   cmake [-DEXIT=<code>] [-DMATCH=<regex>] [-DONE_LINE_ERROR=ON] [-DHELP_IN=<doc.md>] -P expect_run.cmake -- cmd args...
+#   cmake [-DEXIT=<code>] [-DMATCH=<regex>] [-DONE_LINE_ERROR=ON] [-DHELP_IN=<doc.md>] [-DUNCHANGED=<files>]
+#         [-DABSENT=<files>] -P expect_run.cmake -- cmd args...
 # EXIT: the expected exit code (default 0). MATCH: a regex stdout and stderr together must match.
 # ONE_LINE_ERROR: stderr must be exactly one line. HELP_IN: every line of stdout must appear in that file.
+# UNCHANGED: files (';'-separated) whose kind (regular file, link, device) and content the run must keep.
+# ABSENT: files that must not exist after the run.
 set(cmd)
 set(after_separator OFF)
 foreach(i RANGE 1 ${CMAKE_ARGC})
@@ -14,7 +17,30 @@ endforeach()
 if(NOT DEFINED EXIT)
   set(EXIT 0)
 endif()
+function(describe_file file out_var)
+  execute_process(COMMAND stat -c "%F %s" "${file}" OUTPUT_VARIABLE kind ERROR_QUIET)
+  execute_process(COMMAND readlink "${file}" OUTPUT_VARIABLE link ERROR_QUIET)
+  set(sum "")
+  if(kind MATCHES "^regular")
+    file(SHA256 "${file}" sum)
+  endif()
+  set(${out_var} "${kind}${link}${sum}" PARENT_SCOPE)
+endfunction()
+foreach(file ${UNCHANGED})
+  describe_file("${file}" before_${file})
+endforeach()
 execute_process(COMMAND ${cmd} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+foreach(file ${UNCHANGED})
+  describe_file("${file}" after)
+  if(NOT after STREQUAL before_${file})
+    message(FATAL_ERROR "the run changed '${file}':\nbefore: ${before_${file}}\nafter: ${after}\nstderr:\n${err}")
+  endif()
+endforeach()
+foreach(file ${ABSENT})
+  if(EXISTS "${file}")
+    message(FATAL_ERROR "'${file}' exists after the run")
+  endif()
+endforeach()
 if(NOT code STREQUAL EXIT)
   message(FATAL_ERROR "exit code ${code}, expected ${EXIT}\nstdout:\n${out}\nstderr:\n${err}")
 endif()

@@ -9,17 +9,28 @@
 
 namespace fot_bench {
 
+namespace {
+
+struct Spec {
+  const char* name;
+  double resolution;
+  bool has_sensor;
+};
+const Spec kSpecs[] = {{"kinect_capture0001", 0.01, true}, {"kinect_capture0002", 0.01, true},
+                       {"kinect_capture0003", 0.01, true}, {"room_scan1", 0.05, true},
+                       {"room_scan2", 0.05, true},         {"terrain_samp11", 0.30, false}};
+
+}  // namespace
+
+std::vector<std::string> benchScanFiles(const std::string& data_dir) {
+  std::vector<std::string> files;
+  for (const Spec& s : kSpecs) files.push_back(data_dir + "/" + s.name + ".pcd");
+  return files;
+}
+
 std::vector<BenchScan> loadBenchScans(const std::string& data_dir) {
-  struct Spec {
-    const char* name;
-    double resolution;
-    bool has_sensor;
-  };
-  const Spec specs[] = {{"kinect_capture0001", 0.01, true}, {"kinect_capture0002", 0.01, true},
-                        {"kinect_capture0003", 0.01, true}, {"room_scan1", 0.05, true},
-                        {"room_scan2", 0.05, true},         {"terrain_samp11", 0.30, false}};
   std::vector<BenchScan> scans;
-  for (const Spec& s : specs) {
+  for (const Spec& s : kSpecs) {
     BenchScan scan{s.name, s.resolution, s.has_sensor, fot_tools::loadCloud(data_dir + "/" + s.name + ".pcd"),
                    0};
     if (!s.has_sensor) {

@@ -23,6 +23,9 @@ struct BenchScan {
  */
 std::vector<BenchScan> loadBenchScans(const std::string& data_dir);
 
+/** The files loadBenchScans reads. */
+std::vector<std::string> benchScanFiles(const std::string& data_dir);
+
 /** The scan of that name; std::runtime_error if it was not loaded. */
 const BenchScan& findScan(const std::vector<BenchScan>& scans, const std::string& name);
 

@@ -8,9 +8,15 @@ namespace fot {
 namespace io {
 
 /**
- * Writes `bytes` to a temporary file beside `path`, flushes it to disk, then renames it over `path`.
- * A crash at any moment leaves either the old file or the new one, never half of one.
- * Throws std::runtime_error with the system's reason on failure; the temporary file is removed.
+ * Writes `bytes` to `path` so that a crash at any moment leaves either the old file or the new one, never
+ * half of one: to a temporary file beside it, flushed to disk, then renamed over it. A link is followed, and
+ * the file it names is replaced, not the link. A target that exists and is not a regular file (a device such
+ * as /dev/null or /dev/stdout, a pipe) is written into directly, as a stream: it has no old content to keep;
+ * a directory is refused.
+ *
+ * The temporary file is named `.<name>.pcl_fot-tmp.<pid>.<n>` beside the target. One left behind by a
+ * process that was killed is removed by the next write of the same target. Throws std::runtime_error with
+ * the system's reason on failure; the temporary file is removed.
  */
 void writeFileAtomically(const std::string& path, const std::string& bytes);
 

@@ -224,6 +224,16 @@ class FastOctTree {
   std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
 };
 
+inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
+  NodeWord& leaf = words_[path[1]];
+  for (CellState s : {CellState::Free, CellState::Occupied}) {
+    counts_[std::size_t(s)] += node::popcount(node::octantMask(updated, s));
+    counts_[std::size_t(s)] -= node::popcount(node::octantMask(leaf, s));
+  }
+  leaf = updated;
+  return node::isUniform(updated) ? collapseFrom(path, 1) : 1;
+}
+
 template <typename Overlaps, typename Visitor>
 bool FastOctTree::walkRegions(const NodeView& n, Overlaps& overlaps, Visitor& visit) const {
   const Key corner = n.corner.key();
