@@ -136,8 +136,8 @@ TEST(NodeWord, EncodingIsOneWordWithTagBit) {
 TEST(FastOctTree, RejectsBadResolution) {
   EXPECT_THROW(FastOctTree(0.0), std::invalid_argument);
   EXPECT_THROW(FastOctTree(-0.1), std::invalid_argument);
-  EXPECT_THROW(FastOctTree(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
-  EXPECT_THROW(FastOctTree(std::numeric_limits<double>::infinity()), std::invalid_argument);
+  EXPECT_THROW(FastOctTree{std::numeric_limits<double>::quiet_NaN()}, std::invalid_argument);
+  EXPECT_THROW(FastOctTree{std::numeric_limits<double>::infinity()}, std::invalid_argument);
   EXPECT_THROW(FastOctTree(0.1, std::nan("")), std::invalid_argument);
   // Every cell centre of the key range must be a float, as PCL's points are.
   EXPECT_THROW(FastOctTree(1e30), std::invalid_argument);
