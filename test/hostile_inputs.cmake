@@ -90,3 +90,28 @@ file(WRITE "${h}/.other.fot.pcl_fot-tmp.2147483646.0" "another target's")
 tool_test(Hostile.Leftovers.StaleTemporaryIsRemoved COMMAND $<TARGET_FILE:fot_convert> "${h}/c.pcd" "${h}/kept.fot"
           -res 0.1 MATCH "Wrote" ABSENT "${h}/.kept.fot.pcl_fot-tmp.2147483646.0"
           UNCHANGED "${h}/.other.fot.pcl_fot-tmp.2147483646.0")
+
+# 6. A few bytes cost what they hold: OctoMap's nodes are ours, so a pruned leaf at depth 2 (a cube of 16384
+# cells a side) or a root that is a leaf is one word; off OctoMap's grid the size it would need is named at once.
+set(bt_leaf "${PROJECT_SOURCE_DIR}/test/data/hostile/one_pruned_leaf.bt")
+set(ot_root "${PROJECT_SOURCE_DIR}/test/data/hostile/root_leaf.ot")
+tool_test(Hostile.Cost.PrunedLeafAtDepthTwo COMMAND $<TARGET_FILE:fot_info> "${bt_leaf}"
+          MATCH "occupied cells +4398046511104\n +free cells +0\n +node words +1 in 0 blocks")
+tool_test(Hostile.Cost.RootThatIsALeaf COMMAND $<TARGET_FILE:fot_info> "${ot_root}"
+          MATCH "occupied cells +281474976710656\n.*node words +1 in 0 blocks")
+tool_test(Hostile.Cost.CubeToFot COMMAND $<TARGET_FILE:fot_convert> "${bt_leaf}" "${h}/cube.fot" SETUP hostile_cube
+          MATCH "Wrote .*cube.fot")
+tool_test(Hostile.Cost.CubeBackToOctoMap COMMAND $<TARGET_FILE:fot_convert> "${h}/cube.fot" "${h}/cube.bt"
+          REQUIRES hostile_cube MATCH "Wrote .*cube.bt")
+add_test(NAME Tool.Hostile.Cost.CubeRoundTripIsTheFile COMMAND ${CMAKE_COMMAND} -E compare_files "${bt_leaf}" "${h}/cube.bt")
+set_tests_properties(Tool.Hostile.Cost.CubeRoundTripIsTheFile PROPERTIES DEPENDS Tool.Hostile.Cost.CubeBackToOctoMap
+                     FIXTURES_REQUIRED hostile_cube)
+tool_test(Hostile.Cost.OffGridOriginIsRefusedAtOnce COMMAND $<TARGET_FILE:fot_convert> "${bt_leaf}" "${h}/moved.fot"
+          -origin 0.05,0,0 EXIT 2 ONE_LINE_ERROR MATCH "would need up to 2.51e\\+09 bytes .*-max_memory" ABSENT "${h}/moved.fot")
+# The same cube in a map whose origin is a cell off OctoMap's grid, exported; and in a version-1 .fot, whose
+# nodes sat 0x2AAA cells off today's.
+tool_test(Hostile.Cost.OffGridExportIsRefusedAtOnce COMMAND $<TARGET_FILE:fot_convert>
+          "${PROJECT_SOURCE_DIR}/test/data/hostile/cube_off_grid.fot" "${h}/moved.bt" EXIT 2 ONE_LINE_ERROR
+          MATCH "would need up to" ABSENT "${h}/moved.bt")
+tool_test(Hostile.Cost.VersionOneCubeIsRefusedAtOnce COMMAND $<TARGET_FILE:fot_info>
+          "${PROJECT_SOURCE_DIR}/test/data/hostile/cube_v1.fot" EXIT 2 ONE_LINE_ERROR MATCH "would need up to")

@@ -242,18 +242,24 @@ TEST(FastOctTree, CollapseFoldsUniformCubesAndWritesExpandThem) {
 }
 
 TEST(FastOctTree, DepthFollowsTheExtent) {
+  // Levels 1 to 16 are OctoMap's: key 0 is a boundary of each, and the level-16 node is OctoMap's root.
   FastOctTree tree(0.01);
   tree.setCell({0, 0, 0}, CellState::Occupied);
   tree.setCell({1023, 1023, 1023}, CellState::Occupied);
-  EXPECT_LE(tree.getDepth(), 11u) << "a map spanning 1024 cells needs about 10 levels";
+  EXPECT_EQ(tree.getDepth(), 10u) << "an aligned map of 1024 cells a side needs 10 levels";
   FastOctTree centred(0.01);
   centred.setCell({-512, -512, -512}, CellState::Occupied);
   centred.setCell({511, 511, 511}, CellState::Occupied);
-  EXPECT_LE(centred.getDepth(), 11u);
+  EXPECT_EQ(centred.getDepth(), 16u) << "one around key 0 is OctoMap's root";
   FastOctTree small(0.01);
   small.setCell({-3, 2, 1}, CellState::Occupied);
   small.setCell({3, -2, -1}, CellState::Occupied);
-  EXPECT_LE(small.getDepth(), 4u);
+  EXPECT_EQ(small.getDepth(), 16u);
+  // Beyond OctoMap's cube the levels alternate sides again: about log2(extent) + 1.
+  FastOctTree large(0.01);
+  large.setCell({-200000, -200000, -200000}, CellState::Occupied);
+  large.setCell({200000, 200000, 200000}, CellState::Occupied);
+  EXPECT_LE(large.getDepth(), 21u);
 }
 
 TEST(FastOctTree, KeyRangeLimits) {

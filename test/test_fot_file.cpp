@@ -100,6 +100,23 @@ TEST(FotFile, GridAndEmptyMapsSurvive) {
   EXPECT_TRUE(io::decodeFot(e.data(), e.size()).empty());
 }
 
+// test/data/map_v1.fot was written by the version-1 encoder, whose nodes sat 0x2AAA cells off today's.
+TEST(FotFile, VersionOneFilesLoadIntoTodaysNodes) {
+  FastOctTree expected(0.1);
+  for (int i = 0; i < 50; ++i) expected.setCell({i % 7, i / 7, i % 3}, CellState::Occupied);
+  expected.setBox({-20, -5, 3}, {17, 9, 40}, CellState::Free);
+  for (int i = 0; i < 20; ++i) expected.setCell({-i * 3, 2 * i, -i}, CellState::Occupied);
+  const FastOctTree loaded = io::loadFot(std::string(PCL_FOT_SOURCE_DIR) + "/test/data/map_v1.fot");
+  EXPECT_EQ(loaded, expected);
+  EXPECT_EQ(loaded.getFreeCount(), 21660u);
+  const std::string again = io::encodeFot(loaded);
+  EXPECT_EQ(again[8], char(io::kFotVersion)) << "saving writes today's version";
+  EXPECT_EQ(io::decodeFot(again.data(), again.size()), expected);
+  // Within the caller's cap, like any file.
+  EXPECT_THROW(io::loadFot(std::string(PCL_FOT_SOURCE_DIR) + "/test/data/map_v1.fot", 12 * 1024),
+               MemoryLimitError);
+}
+
 TEST(FotFile, EveryHeaderFieldIsChecked) {
   FastOctTree small(0.1);
   for (int i = 0; i < 50; ++i) small.setCell({i % 7, i / 7, i % 3}, CellState::Occupied);
@@ -112,8 +129,8 @@ TEST(FotFile, EveryHeaderFieldIsChecked) {
   b[1] = 'X';
   expectRejected(b, "magic");
   b = good;
-  put32(b, 8, 2);
-  expectRejected(b, "version 2");
+  put32(b, 8, 3);
+  expectRejected(b, "version 3");
   b = good;
   put32(b, 12, 128);
   expectRejected(b, "header of 128 bytes");

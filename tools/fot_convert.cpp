@@ -31,6 +31,8 @@ void printHelp(const char* prog) {
       "                      maps, a whole number of cells from 0 on each axis\n"
       "  -free               .pcd and .vtk outputs: free voxels as well as occupied ones\n"
       "  -color <mode>       .pcd and .vtk outputs: height (default), state, or none (.pcd only)\n"
+      "  -max_memory <MiB>   the most memory a map may take (default: 1024); a file that needs more, or an\n"
+      "                      OctoMap export that would, is refused at once\n"
       "  -h                  this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read, is not valid, or cannot be\n"
       "written, or a map the output format cannot hold.\n",
@@ -99,21 +101,23 @@ pcl::fot::FastOctTree readInput(const std::string& input, const Arguments& args,
   if (in_ext == ".bt" || in_ext == ".ot") {
     pcl::fot::io::OctoMapImportOptions options;
     std::copy(origin.begin(), origin.end(), options.origin);
+    options.max_pool_bytes = maxMemory(args);
     return in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
   }
-  if (in_ext == ".fot") return pcl::fot::io::loadFot(input);
+  if (in_ext == ".fot") return pcl::fot::io::loadFot(input, maxMemory(args));
   throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
 }
 
 /** Writes the map by the output's extension; returns what was written. */
 std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& output,
-                        const std::string& out_ext, const pcl::fot::io::VoxelExportOptions& exported) {
+                        const std::string& out_ext, const pcl::fot::io::VoxelExportOptions& exported,
+                        std::size_t max_bytes) {
   if (out_ext == ".fot") {
     pcl::fot::io::saveFot(tree, output);
     return "map";
   }
   if (out_ext == ".bt") {
-    pcl::fot::io::saveBt(tree, output);
+    pcl::fot::io::saveBt(tree, output, max_bytes);
     return "OctoMap map";
   }
   if (out_ext == ".pcd")
@@ -125,7 +129,7 @@ std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& ou
 
 int main(int argc, char** argv) {
   return runTool("fot_convert", "fot_convert input output [options]", [&] {
-    const Arguments args(argc, argv, {"-res", "-origin", "-color"}, {"-free", "-h", "--help"}, 2, 2);
+    const Arguments args(argc, argv, {"-res", "-origin", "-color", "-max_memory"}, {"-free", "-h", "--help"}, 2, 2);
     if (args.helpAsked()) {
       printHelp("fot_convert");
       return kExitOk;
@@ -146,7 +150,7 @@ int main(int argc, char** argv) {
     TicToc timer;
     timer.tic();
     const pcl::fot::FastOctTree tree = readInput(input, args, origin);
-    const std::string what = writeOutput(tree, output, out_ext, exported);
+    const std::string what = writeOutput(tree, output, out_ext, exported, maxMemory(args));
     print_info("Wrote %s (%s: %llu occupied, %llu free cells) in %.0f ms\n", output.c_str(), what.c_str(),
                (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(),
                timer.toc());

@@ -16,13 +16,15 @@ void printHelp(const char* prog) {
       "Prints what maps hold: resolution, origin, the extent of their known cells, depth, cell counts by\n"
       "state, node words and bytes.\n\n"
       "Syntax: %s map.fot|map.bt|map.ot [more maps ...]\n\n"
-      "  -h   this help\n\n"
+      "  -max_memory <MiB>  the most memory a map may take (default: 1024); a file that needs more is\n"
+      "                     refused at once\n"
+      "  -h                 this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read or is not a valid map.\n",
       prog);
 }
 
-void describe(const std::string& path) {
-  const pcl::fot::FastOctTree tree = loadMap(path);
+void describe(const std::string& path, std::size_t max_bytes) {
+  const pcl::fot::FastOctTree tree = loadMap(path, max_bytes);
   const pcl::fot::CellGrid& grid = tree.getGrid();
   print_info("%s\n", path.c_str());
   print_info("  resolution      %.17g m\n", grid.resolution());
@@ -56,12 +58,13 @@ void describe(const std::string& path) {
 
 int main(int argc, char** argv) {
   return runTool("fot_info", "fot_info map.fot|map.bt|map.ot [more maps ...]", [&] {
-    const Arguments args(argc, argv, {}, {"-h", "--help"}, 1);
+    const Arguments args(argc, argv, {"-max_memory"}, {"-h", "--help"}, 1);
     if (args.helpAsked()) {
       printHelp("fot_info");
       return kExitOk;
     }
-    for (const std::string& path : args.positional()) describe(path);
+    const std::size_t max_bytes = maxMemory(args);
+    for (const std::string& path : args.positional()) describe(path, max_bytes);
     return kExitOk;
   });
 }

@@ -34,6 +34,8 @@ void printHelp(const char* prog) {
       "  -free                compare free cells too (V = {occupied, free}); point clouds have none\n"
       "  -cap <cells>         each cell's distance counts at most this many cells\n"
       "  -threads <n>         worker threads (default: 0, all); the result does not depend on it\n"
+      "  -max_memory <MiB>    the most memory a map may take (default: 1024); a file that needs more is\n"
+      "                       refused at once\n"
       "  -h                   this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 a file that cannot be read, or maps of different grids.\n",
       prog);
@@ -69,7 +71,7 @@ void checkKept(const char* which, const std::string& path, std::size_t points,
 
 int main(int argc, char** argv) {
   return runTool("fot_psi", "fot_psi a b [options]", [&] {
-    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads"}, {"-free", "-h", "--help"}, 2,
+    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads", "-max_memory"}, {"-free", "-h", "--help"}, 2,
                          2);
     if (args.helpAsked()) {
       printHelp("fot_psi");
@@ -96,7 +98,7 @@ int main(int argc, char** argv) {
     const std::string paths[2] = {args.positional()[0], args.positional()[1]};
     std::optional<pcl::fot::FastOctTree> maps[2];
     for (int i = 0; i < 2; ++i)
-      if (isMapFile(paths[i])) maps[i] = loadMap(paths[i]);
+      if (isMapFile(paths[i])) maps[i] = loadMap(paths[i], maxMemory(args));
     if (maps[0] && transformed) throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
     pcl::fot::CellGrid cloud_grid(res);
     if (!args.has("-res") && (maps[0] || maps[1])) cloud_grid = (maps[0] ? maps[0] : maps[1])->getGrid();

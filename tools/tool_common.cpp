@@ -83,11 +83,20 @@ bool isMapFile(const std::string& path) {
   return ext == ".fot" || ext == ".bt" || ext == ".ot";
 }
 
-pcl::fot::FastOctTree loadMap(const std::string& path) {
+std::size_t maxMemory(const Arguments& args) {
+  double mib = 1024;
+  args.getPositive("-max_memory", mib);
+  if (!(mib < 1e12)) throw ToolError(kExitUsage, "option -max_memory takes MiB, below 1e12");
+  return std::size_t(std::max(1.0, mib * 1048576.0));
+}
+
+pcl::fot::FastOctTree loadMap(const std::string& path, std::size_t max_bytes) {
   const std::string ext = extension(path);
-  if (ext == ".fot") return pcl::fot::io::loadFot(path);
-  if (ext == ".bt") return pcl::fot::io::loadBt(path);
-  if (ext == ".ot") return pcl::fot::io::loadOt(path);
+  pcl::fot::io::OctoMapImportOptions options;
+  options.max_pool_bytes = max_bytes;
+  if (ext == ".fot") return pcl::fot::io::loadFot(path, max_bytes);
+  if (ext == ".bt") return pcl::fot::io::loadBt(path, options);
+  if (ext == ".ot") return pcl::fot::io::loadOt(path, options);
   throw ToolError(kExitUsage, "'" + path + "' is not a .fot, .bt or .ot map");
 }
 

@@ -42,8 +42,14 @@ void requireRegularFile(const std::string& path, const std::string& what);
  */
 bool readLine(std::istream& in, std::string& line, std::size_t max_chars);
 
-/** Reads a .fot, .bt or .ot map. */
-pcl::fot::FastOctTree loadMap(const std::string& path);
+/**
+ * -max_memory, in bytes: the most a map may take in memory, as MiB (1024 by default). A file whose map would
+ * need more, say a few bytes of OctoMap cube placed off its grid, is refused at once with the size it needs.
+ */
+std::size_t maxMemory(const Arguments& args);
+
+/** Reads a .fot, .bt or .ot map of at most max_bytes. */
+pcl::fot::FastOctTree loadMap(const std::string& path, std::size_t max_bytes);
 
 /** True for the extensions loadMap reads. */
 bool isMapFile(const std::string& path);
@@ -62,6 +68,9 @@ int runTool(const char* tool, const char* syntax, Body&& body) {
     else
       pcl::console::print_error("%s: %s\n", tool, e.what());
     return e.code;
+  } catch (const pcl::fot::MemoryLimitError& e) {
+    pcl::console::print_error("%s: %s (-max_memory raises the cap, where the tool has it)\n", tool, e.what());
+    return kExitInput;
   } catch (const std::bad_alloc&) {
     pcl::console::print_error("%s: out of memory\n", tool);
     return kExitInput;

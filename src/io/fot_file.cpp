@@ -2,10 +2,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <boost/crc.hpp>
 
 #include <pcl_fot/io/file_io.h>
+
+#include "io/region_copy.h"
 
 namespace pcl {
 namespace fot {
@@ -41,6 +44,20 @@ double getDouble(const unsigned char* p) {
   double d;
   std::memcpy(&d, &bits, 8);
   return d;
+}
+
+/** Version 1 placed its nodes at keys + 0x2AAAAAAA, today's tree coordinates less 0x2AAA cells. */
+constexpr unsigned kLegacyVersion = 1;
+constexpr std::int64_t kLegacyOffset = 0x2AAA;
+
+/** A version-1 map read as today's sits 0x2AAA cells off on each axis: its cells, moved back. */
+FastOctTree fromLegacyCoordinates(const FastOctTree& read, std::size_t max_pool_bytes) {
+  FastOctTree tree(read.getGrid());
+  tree.setMaxMemoryBytes(max_pool_bytes);
+  const std::int64_t shift[3] = {-kLegacyOffset, -kLegacyOffset, -kLegacyOffset};
+  copyShifted(read, tree, shift);
+  tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
+  return tree;
 }
 
 std::uint32_t crc32(const char* data, std::size_t size) {
@@ -82,9 +99,9 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
     throw fail("it does not start with the .fot magic bytes");
   if (size < 16) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const std::uint32_t version = get32(p + 8), header = get32(p + 12);
-  if (version != kFotVersion)
-    throw fail("format version " + std::to_string(version) + "; this build reads version " +
-               std::to_string(kFotVersion));
+  if (version != kFotVersion && version != kLegacyVersion)
+    throw fail("format version " + std::to_string(version) + "; this build reads versions " +
+               std::to_string(kLegacyVersion) + " and " + std::to_string(kFotVersion));
   if (header != kHeaderBytes) throw fail("a header of " + std::to_string(header) + " bytes, not 96");
   if (size < kHeaderBytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32),
@@ -116,6 +133,7 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
         FastOctTree::fromCanonicalPool(CellGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
     if (tree.getOccupiedCount() != occupied || tree.getFreeCount() != free)
       throw fail("the cell counts in the header do not match the tree");
+    if (version == kLegacyVersion) return fromLegacyCoordinates(tree, max_pool_bytes);
     return tree;
   } catch (const std::invalid_argument& e) {
     throw fail(e.what());

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <pcl_fot/io/file_io.h>
 
 #include "io/octomap_format.h"
+#include "io/region_copy.h"
 
 namespace pcl {
 namespace fot {
@@ -47,8 +49,10 @@ class BtWriter {
       if (childCode(children[o]) == 3) node(children[o], level - 1);
   }
 
-  /** An inner node above the staging tree's root, whose only child (octant `o`) leads towards it. */
+  /** An inner node above the map's node, whose only child (octant `o`) leads towards it. */
   void chain(unsigned o) { record(3u << (2 * o)); }
+  /** The inner node whose only child, octant `o`, is the uniform word w: a pruned leaf. */
+  void leaf(unsigned o, NodeWord w) { record(childCode(w) << (2 * o)); }
 
   const std::string& body() const { return body_; }
   std::uint64_t nodes() const { return nodes_; }
@@ -120,7 +124,7 @@ std::string exactDecimal(double v) {
 
 }  // namespace
 
-std::string encodeBt(const FastOctTree& tree) {
+std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes) {
   const CellGrid& grid = tree.getGrid();
   const double res = grid.resolution();
   const std::int64_t shift_to_octomap[3] = {kCentre + cellsFromZero(grid.origin()[0], res, "x"),
@@ -135,19 +139,32 @@ std::string encodeBt(const FastOctTree& tree) {
             "pcl::fot::io: the map has cells beyond OctoMap's 65536 cells per axis (" +
             std::to_string(kCentre) + " cells either side of coordinate 0)");
   });
-  // Staging keys are OctoMap keys minus 0xAAAA (see kStagingBase).
-  const std::int64_t shift[3] = {shift_to_octomap[0] - 0xAAAA, shift_to_octomap[1] - 0xAAAA,
-                                 shift_to_octomap[2] - 0xAAAA};
-  FastOctTree staging(res);
-  copyShifted(tree, staging, shift);
+  // Staging keys are OctoMap keys less 32768, those of the map itself at origin 0: then no copy is needed.
+  const bool at_zero = shift_to_octomap[0] == kCentre && shift_to_octomap[1] == kCentre &&
+                       shift_to_octomap[2] == kCentre;
+  std::optional<FastOctTree> moved;
+  if (!at_zero) {
+    const std::int64_t shift[3] = {shift_to_octomap[0] - kCentre, shift_to_octomap[1] - kCentre,
+                                   shift_to_octomap[2] - kCentre};
+    moved.emplace(res);
+    moved->setMaxMemoryBytes(max_pool_bytes);
+    copyShifted(tree, *moved, shift);
+  }
+  const FastOctTree& staging = at_zero ? tree : *moved;
 
   BtWriter writer(staging);
   if (!staging.empty()) {
-    // Every cell lies in OctoMap's root cube, so the staging root does too (a tree's root is the smallest
-    // aligned cube around what was written); the levels above it are chains of single children.
-    const NodeView root = staging.root();
-    for (unsigned level = kDepth; level > root.level; --level) writer.chain(root.corner.octant(level));
-    writer.node(root.word, root.level);
+    // Every cell lies in OctoMap's root cube, so the node holding them all does too; the levels above it are
+    // chains of single children.
+    const NodeView root = staging.contentRoot();
+    // A uniform node is a pruned leaf of its parent, as OctoMap writes it; OctoMap's root is always a record.
+    const bool pruned = root.isUniform() && root.level < kDepth;
+    const unsigned holder = pruned ? root.level + 1 : root.level;
+    for (unsigned level = kDepth; level > holder; --level) writer.chain(root.corner.octant(level));
+    if (pruned)
+      writer.leaf(root.corner.octant(holder), root.word);
+    else
+      writer.node(root.word, root.level);
   }
   std::string out = std::string(kFirstLine) +
                     "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
@@ -157,8 +174,8 @@ std::string encodeBt(const FastOctTree& tree) {
   return out + writer.body();
 }
 
-void saveBt(const FastOctTree& tree, const std::string& path) {
-  writeFileAtomically(path, encodeBt(tree));
+void saveBt(const FastOctTree& tree, const std::string& path, std::size_t max_pool_bytes) {
+  writeFileAtomically(path, encodeBt(tree, max_pool_bytes));
 }
 
 FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& name,

@@ -1,5 +1,7 @@
 #include "io/octomap_format.h"
 
+#include "io/region_copy.h"
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -29,20 +31,6 @@ std::int32_t cellsFromZero(double origin, double res, const char* axis) {
     throw std::invalid_argument(text);
   }
   return std::int32_t(whole);
-}
-
-void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t shift[3]) {
-  from.forEachRegion([&](const Region& r) {
-    const std::int64_t last = (std::int64_t(1) << r.level) - 1;
-    const std::int64_t lo[3] = {r.min_key.x + shift[0], r.min_key.y + shift[1], r.min_key.z + shift[2]};
-    for (std::int64_t c : lo)
-      if (c < kMinKey || c + last > kMaxKey)
-        throw std::invalid_argument(
-            "pcl::fot::io: the cells lie beyond the key range once moved to the origin");
-    to.setBox(Key{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])},
-              Key{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)},
-              r.state);
-  });
 }
 
 Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file) {
@@ -89,16 +77,19 @@ Header readHeader(const char* bytes, std::size_t size, const char* first_line, c
   return h;
 }
 
-FastOctTree placeStaging(const FastOctTree& staging, double res, const OctoMapImportOptions& options) {
+FastOctTree placeStaging(FastOctTree staging, double res, const OctoMapImportOptions& options) {
   const std::int32_t origin_cells[3] = {cellsFromZero(options.origin[0], res, "x"),
                                         cellsFromZero(options.origin[1], res, "y"),
                                         cellsFromZero(options.origin[2], res, "z")};
+  // At origin 0 the staging tree is the map; elsewhere its keys move by the origin's cells.
+  if (origin_cells[0] == 0 && origin_cells[1] == 0 && origin_cells[2] == 0) {
+    staging.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
+    return staging;
+  }
   FastOctTree tree(CellGrid(res, options.origin[0], options.origin[1], options.origin[2]));
   tree.setMaxMemoryBytes(options.max_pool_bytes);
-  // Staging key + 0xAAAA = OctoMap key = key + 32768 + origin cells.
-  const std::int64_t shift[3] = {0xAAAA - kCentre - std::int64_t(origin_cells[0]),
-                                 0xAAAA - kCentre - std::int64_t(origin_cells[1]),
-                                 0xAAAA - kCentre - std::int64_t(origin_cells[2])};
+  const std::int64_t shift[3] = {-std::int64_t(origin_cells[0]), -std::int64_t(origin_cells[1]),
+                                 -std::int64_t(origin_cells[2])};
   copyShifted(staging, tree, shift);
   tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
   return tree;

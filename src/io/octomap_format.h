@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap.h>
@@ -17,17 +18,15 @@ namespace octomap_format {
 constexpr unsigned kDepth = 16;  // OctoMap's tree depth: 65536 cells per axis
 constexpr std::int32_t kCentre = 32768;
 
-// OctoMap's cells live in a staging tree whose tree coordinates are OctoMap's keys plus 0x2AAA0000, so that
-// its nodes are exactly OctoMap's: the level-16 cube at kStagingRoot is OctoMap's root.
+// OctoMap's cells are read into a staging tree whose tree coordinates are OctoMap's keys plus 0x2AAA0000, so
+// that its nodes are exactly OctoMap's: the level-16 cube at kStagingRoot is OctoMap's root. Its keys are
+// OctoMap's less 32768: those of a map with origin 0 (see tree_coord).
 constexpr std::uint32_t kStagingBase = 0x2AAA0000u;
 const TreeCoord kStagingRoot(kStagingBase, kStagingBase, kStagingBase);
 
 /** The origin in whole cells from coordinate 0; throws std::invalid_argument if it is not on OctoMap's grid.
  */
 std::int32_t cellsFromZero(double origin, double res, const char* axis);
-
-/** Copies every known region of `from` into `to`, keys shifted by `shift`. */
-void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t shift[3]);
 
 struct Header {
   std::string id;      ///< the tree type; OctoMap's legacy "1" reads as "OcTree"
@@ -43,7 +42,7 @@ struct Header {
 Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file);
 
 /** The map a staging tree holds, moved to the caller's origin, within the caller's memory cap. */
-FastOctTree placeStaging(const FastOctTree& staging, double res, const OctoMapImportOptions& options);
+FastOctTree placeStaging(FastOctTree staging, double res, const OctoMapImportOptions& options);
 
 /**
  * Reads the tree after the header into a staging tree, with the reader make_reader(body, size, staging)
@@ -70,7 +69,7 @@ FastOctTree readBody(const char* bytes, std::size_t size, const Header& h,
                       std::to_string(h.size));
   if (reader.left() != 0)
     throw FormatError(what_file + ": " + std::to_string(reader.left()) + " bytes follow the tree");
-  return placeStaging(staging, h.resolution, options);
+  return placeStaging(std::move(staging), h.resolution, options);
 }
 
 }  // namespace octomap_format

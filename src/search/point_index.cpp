@@ -58,6 +58,9 @@ std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_
   return next;
 }
 
+/** The key of the points' centre: tree coordinate 0x2AAAAAAA, halfway between level boundaries. */
+constexpr std::int32_t kCentreKey = 0x2AAA;
+
 std::atomic<std::uint64_t> next_build_id{1};
 constexpr std::uint32_t kNoSlot = ~std::uint32_t(0);
 
@@ -369,15 +372,17 @@ void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed)
   double origin[3] = {0, 0, 0};
   if (extent.finite > 0) {
     // The grid is centred on the points, or on their bulk when they reach further than its keys: then a
-    // few stray points far away become the outliers, rather than the bulk.
-    const double reach = 2.0 * double(kMaxKey) * resolution_;
+    // few stray points far away become the outliers, rather than the bulk. The centre sits kCentreKey cells
+    // from key 0, away from the planes where the nodes of levels 1 to 16 all meet (see tree_coord), so that
+    // the searches seldom climb that high.
+    const double reach = 2.0 * double(kMaxKey - kCentreKey) * resolution_;
     const bool fits = extent.hi[0] - extent.lo[0] <= reach && extent.hi[1] - extent.lo[1] <= reach &&
                       extent.hi[2] - extent.lo[2] <= reach;
     if (!fits && extent.sample.empty()) extent.findBulk(in);
     for (int a = 0; a < 3; ++a) {
       const double centre =
           0.5 * (fits ? extent.lo[a] + extent.hi[a] : extent.bulk_lo[a] + extent.bulk_hi[a]);
-      origin[a] = std::floor(centre / resolution_) * resolution_;
+      origin[a] = (std::floor(centre / resolution_) - double(kCentreKey)) * resolution_;
     }
   }
   // Points near float's limits may put a centred grid beyond them: then it is centred on 0, and the

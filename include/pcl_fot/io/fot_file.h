@@ -16,8 +16,11 @@ class FormatError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/** The .fot format version this build writes and reads. */
-constexpr unsigned kFotVersion = 1;
+/**
+ * The .fot format version this build writes. It reads it and version 1, whose tree coordinates were keys +
+ * 0x2AAAAAAA (see tree_coord): such a map is moved into today's nodes on loading, within the pool cap.
+ */
+constexpr unsigned kFotVersion = 2;
 /** By default a loader refuses pools beyond 4 GiB rather than allocate whatever a file claims. */
 constexpr std::size_t kDefaultMaxPoolBytes = std::size_t(4) << 30;
 

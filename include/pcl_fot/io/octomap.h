@@ -19,7 +19,11 @@ namespace io {
  */
 
 struct OctoMapImportOptions {
-  /** Origin of the map to build; it must lie on OctoMap's grid (a whole number of cells from 0). */
+  /**
+   * Origin of the map to build; it must lie on OctoMap's grid (a whole number of cells from 0). At 0 the
+   * map's nodes are OctoMap's and the import costs what the file holds; elsewhere a large cube may split
+   * along its surface, within max_pool_bytes.
+   */
   double origin[3] = {0.0, 0.0, 0.0};
   /** The map may not grow beyond this: a hostile file gets MemoryLimitError, not all the memory. */
   std::size_t max_pool_bytes = kDefaultMaxPoolBytes;
@@ -27,12 +31,15 @@ struct OctoMapImportOptions {
 
 /**
  * The .bt bytes of a tree. OctoMap's log-odds are not carried: a .bt holds maximum-likelihood states only,
- * as this map does. Throws std::invalid_argument, saying why, if the map is not representable.
+ * as this map does. Throws std::invalid_argument, saying why, if the map is not representable. The trees'
+ * nodes coincide when the map's origin is 0 (see tree_coord): then the cost follows the tree. At another
+ * origin OctoMap's nodes are its nodes moved, and a large cube may split along its surface; a map that
+ * needs more than max_pool_bytes for that gets MemoryLimitError, saying how much, before the work.
  */
-std::string encodeBt(const FastOctTree& tree);
+std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
 
 /** Writes a .bt file atomically. Throws as encodeBt, and std::runtime_error on I/O errors. */
-void saveBt(const FastOctTree& tree, const std::string& path);
+void saveBt(const FastOctTree& tree, const std::string& path, std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
 
 /**
  * The map in .bt bytes, with OctoMap's cells: its resolution from the header, the origin from the options.

@@ -163,6 +163,11 @@ class FastOctTree {
    */
   NodeView root() const { return NodeView{words_[0], root_level_, base_}; }
   const NodeWord* words() const { return words_.data(); }
+  /**
+   * The smallest node holding every known cell: the root, descended while only one octant holds anything.
+   * Canonical form holds below the root, so two trees with the same cells reach the same node.
+   */
+  NodeView contentRoot() const;
   std::size_t poolWords() const { return words_.size(); }
   /** Changes whenever blocks are allocated, freed or re-linked; accessors restart from the root then. */
   std::uint64_t structureVersion() const { return version_; }
@@ -197,11 +202,7 @@ class FastOctTree {
   unsigned collapseFrom(const std::size_t* path, unsigned level);
   /** Writes the aligned cube of 2^level cells per axis whose corner is c. */
   void setCube(const TreeCoord& c, unsigned level, CellState state);
-  /**
-   * The smallest node holding every known cell: the root, descended while only one octant holds anything.
-   * Canonical form holds below the root, so two trees with the same cells reach the same node.
-   */
-  NodeView contentRoot() const;
+
   /** Frees the blocks below word w, of level `level`, and takes its cells out of the counts. */
   void releaseSubtree(NodeWord w, unsigned level);
 

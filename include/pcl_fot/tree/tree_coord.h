@@ -9,17 +9,19 @@ namespace pcl {
 namespace fot {
 
 /**
- * Tree coordinates: keys shifted by a constant with alternating bits. Nodes are aligned to multiples of
- * their size in this space, so the tree's shape depends only on its contents. The shift keeps level
- * boundaries away from key 0, where sensors usually sit: a map spanning s cells around the origin needs
- * about log2(s) + 1 levels instead of the full depth.
+ * Tree coordinates: keys shifted by a constant, u = key + 0x2AAA8000. Nodes are aligned to multiples of
+ * their size in this space, so the tree's shape depends only on its contents. The low 16 bits of the shift
+ * put levels 1 to 16 on OctoMap's node boundaries (its key is key + 32768 on a grid with origin 0): the
+ * level-16 node holding key 0 spans keys [-32768, 32767], OctoMap's root, and every OctoMap node is one node
+ * here. Above level 16 the shift's alternating bits put the boundaries on alternating sides of that node,
+ * so a map of s cells around it needs about log2(s) + 1 levels instead of the full depth.
  *
  * A level-l node spans 2^l cells per axis; its octant o (bit 0: x, bit 1: y, bit 2: z) is the child whose
  * cube holds the upper half along each axis whose bit is set. Every walk through the tree speaks this
  * vocabulary: the scalar functions for the hot loops that keep the axes in registers, TreeCoord elsewhere.
  */
 namespace tree_coord {
-constexpr std::uint32_t kShift = 0x2AAAAAAAu;
+constexpr std::uint32_t kShift = 0x2AAA8000u;
 
 inline std::uint32_t fromKey(std::int32_t k) {
   return std::uint32_t(k) + kShift;
