@@ -84,12 +84,27 @@ endif()
 tool_test(Hostile.Advice.ResolutionTooFine COMMAND $<TARGET_FILE:fot_convert> "${data}/room_scan1.pcd" "${h}/fine.fot"
           -res 1e-12 MATCH "coarser -res")
 
+# A cloud just wider than 2^29 cells of 0.5 nm either side of 0: the origin named is its centre on the grid,
+# without "-0", and it holds every point.
+file(WRITE "${h}/narrow.pcd" "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n-0.4 0 0\n0 0 0\n")
+tool_test(Hostile.Advice.OriginOnTheGrid COMMAND $<TARGET_FILE:fot_convert> "${h}/narrow.pcd" "${h}/narrow.fot" -res 5e-10
+          MATCH "1 points lie beyond .* -origin -0[.]2[0-9]*,0,0\n")
+tool_test(Hostile.Advice.TheNamedOriginHoldsEveryPoint COMMAND $<TARGET_FILE:fot_convert> "${h}/narrow.pcd"
+          "${h}/narrow_centred.fot" -res 5e-10 -origin -0.200000003,0,0 MATCH "Inserted 2 points \\(skipped 0 NaN/Inf, 0 out of range\\)")
+
 # 8. A temporary file left by a killed writer is removed by the next write of the same target.
 file(WRITE "${h}/.kept.fot.pcl_fot-tmp.2147483646.0" "left by a killed writer")
 file(WRITE "${h}/.other.fot.pcl_fot-tmp.2147483646.0" "another target's")
 tool_test(Hostile.Leftovers.StaleTemporaryIsRemoved COMMAND $<TARGET_FILE:fot_convert> "${h}/c.pcd" "${h}/kept.fot"
           -res 0.1 MATCH "Wrote" ABSENT "${h}/.kept.fot.pcl_fot-tmp.2147483646.0"
           UNCHANGED "${h}/.other.fot.pcl_fot-tmp.2147483646.0")
+# A writer that is still alive (process 1 always is) keeps its temporary file.
+file(WRITE "${h}/.busy.fot.pcl_fot-tmp.1.0" "being written")
+tool_test(Hostile.Leftovers.ALiveWritersTemporaryStays COMMAND $<TARGET_FILE:fot_convert> "${h}/c.pcd" "${h}/busy.fot"
+          -res 0.1 MATCH "Wrote" UNCHANGED "${h}/.busy.fot.pcl_fot-tmp.1.0")
+# fot_map's outputs are replaced one by one: each whole, the map first.
+tool_test(Hostile.Leftovers.EveryOutputWhole COMMAND $<TARGET_FILE:fot_map> -res 0.1 "${h}/c.pcd" -out "${h}/whole"
+          MATCH "Wrote .*whole.fot .*whole_occupied.pcd .*whole_mesh.vtk")
 
 # 6. A few bytes cost what they hold: OctoMap's nodes are ours, so a pruned leaf at depth 2 (a cube of 16384
 # cells a side) or a root that is a leaf is one word; off OctoMap's grid the size it would need is named at once.

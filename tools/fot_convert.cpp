@@ -61,20 +61,22 @@ void adviseOnRange(const pcl::PointCloud<pcl::PointXYZ>& cloud, double res, std:
       lo = lo.cwiseMin(p.getVector3fMap().cast<double>());
       hi = hi.cwiseMax(p.getVector3fMap().cast<double>());
     }
-  const double span = (hi - lo).maxCoeff(), reach = std::ldexp(res, 30);
-  if (span >= reach) {
+  // An origin at the centre, on the grid, holds the cloud if it spans 2^30 cells less the rounding.
+  const double span = (hi - lo).maxCoeff();
+  if (!(span <= std::ldexp(res, 30) - 2 * res)) {
     print_warn(
         "%zu points lie beyond the map's cells: the cloud spans %g m, more than the 2^30 cells of %g m a map "
         "holds per axis; give a coarser -res (%g m or more)\n",
         beyond, span, res, std::ldexp(span, -30) * 1.01);
     return;
   }
-  const Eigen::Vector3d centre = (lo + hi) / 2;
-  auto tidy = [](double v) { return std::abs(v) < 0.5 ? 0.0 : v; };  // "0", not "-0"
+  double origin[3];
+  for (int a = 0; a < 3; ++a)
+    origin[a] = std::round((lo[a] + hi[a]) / 2 / res) * res + 0.0;  // + 0.0: no "-0"
   print_warn(
       "%zu points lie beyond 2^29 cells of the origin: centre the map on the cloud with -origin "
-      "%.0f,%.0f,%.0f\n",
-      beyond, tidy(centre.x()), tidy(centre.y()), tidy(centre.z()));
+      "%.12g,%.12g,%.12g\n",
+      beyond, origin[0], origin[1], origin[2]);
 }
 
 /** A map of a point cloud's points, no ray tracing; names an origin that fits when points lie beyond it. */
@@ -129,7 +131,8 @@ std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& ou
 
 int main(int argc, char** argv) {
   return runTool("fot_convert", "fot_convert input output [options]", [&] {
-    const Arguments args(argc, argv, {"-res", "-origin", "-color", "-max_memory"}, {"-free", "-h", "--help"}, 2, 2);
+    const Arguments args(argc, argv, {"-res", "-origin", "-color", "-max_memory"}, {"-free", "-h", "--help"},
+                         2, 2);
     if (args.helpAsked()) {
       printHelp("fot_convert");
       return kExitOk;
