@@ -64,18 +64,20 @@ int runTool(const char* tool, const char* syntax, Body&& body) {
     return body();
   } catch (const ToolError& e) {
     if (e.code == kExitUsage)
-      pcl::console::print_error("%s: %s (usage: %s; -h for help)\n", tool, e.what(), syntax);
+      pcl::console::print_error("%s: %s (usage: %s; -h for help)\n", tool, printable(e.what()).c_str(),
+                                syntax);
     else
-      pcl::console::print_error("%s: %s\n", tool, e.what());
+      pcl::console::print_error("%s: %s\n", tool, printable(e.what()).c_str());
     return e.code;
   } catch (const pcl::fot::MemoryLimitError& e) {
-    pcl::console::print_error("%s: %s (-max_memory raises the cap, where the tool has it)\n", tool, e.what());
+    pcl::console::print_error("%s: %s (-max_memory raises the cap, where the tool has it)\n", tool,
+                              printable(e.what()).c_str());
     return kExitInput;
   } catch (const std::bad_alloc&) {
     pcl::console::print_error("%s: out of memory\n", tool);
     return kExitInput;
   } catch (const std::exception& e) {
-    pcl::console::print_error("%s: %s\n", tool, e.what());
+    pcl::console::print_error("%s: %s\n", tool, printable(e.what()).c_str());
     return kExitInput;
   }
 }

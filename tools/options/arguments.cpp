@@ -32,6 +32,24 @@ bool withinFloat(double v) {
 
 }  // namespace
 
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (u < 0x20 || u == 0x7F) {
+      const char hex[] = "0123456789abcdef";
+      out += "\\x";
+      out += hex[u >> 4];
+      out += hex[u & 15u];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 Arguments::Arguments(int argc, char** argv, std::set<std::string> valued, std::set<std::string> switches,
                      std::size_t min_positional, std::size_t max_positional) {
   for (int i = 1; i < argc; ++i) {
@@ -48,7 +66,7 @@ Arguments::Arguments(int argc, char** argv, std::set<std::string> valued, std::s
         value = argv[++i];
         if (value.empty()) throw ToolError(kExitUsage, "option " + a + " needs a value, and it is empty");
       } else if (!switches.count(a)) {
-        throw ToolError(kExitUsage, "unknown option " + a);
+        throw ToolError(kExitUsage, "unknown option " + printable(a));
       }
       if (!values_.emplace(a, value).second) throw ToolError(kExitUsage, "option " + a + " is given twice");
       continue;
@@ -57,7 +75,7 @@ Arguments::Arguments(int argc, char** argv, std::set<std::string> valued, std::s
   }
   const std::size_t n = positional_.size();
   if (n > max_positional)
-    throw ToolError(kExitUsage, "unexpected argument '" + positional_[max_positional] + "'");
+    throw ToolError(kExitUsage, "unexpected argument '" + printable(positional_[max_positional]) + "'");
   if (n < min_positional)
     throw ToolError(kExitUsage, "expected " + std::to_string(min_positional) +
                                     (max_positional == min_positional ? "" : " or more") +

@@ -14,6 +14,9 @@ constexpr int kExitOk = 0;
 constexpr int kExitUsage = 1;  ///< bad arguments
 constexpr int kExitInput = 2;  ///< a file that cannot be read, is not valid, or cannot be written
 
+/** The text with its control characters escaped ("\\n", "\\x1b"): an error message stays on one line. */
+std::string printable(const std::string& text);
+
 /** A one-line message for the user; the tool prints it and exits with `code`. */
 struct ToolError : std::runtime_error {
   ToolError(int exit_code, const std::string& what) : std::runtime_error(what), code(exit_code) {}
