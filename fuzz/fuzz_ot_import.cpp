@@ -1,37 +1,8 @@
-// Fuzz target: the OctoMap .ot importer. Every input is refused (FormatError) or loads a map whose pool
-// follows the file's size and that exports to .bt and imports back equal; moved a cell off OctoMap's grid it
-// holds the same cells or is refused past the cap (MemoryLimitError).
-#include <cstdint>
-#include <cstdlib>
-#include <optional>
-#include <string>
-
-#include <pcl_fot/io/octomap.h>
+// Fuzz target: the OctoMap .ot importer, with the checks of octomap_import_checks.h.
+#include "octomap_import_checks.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  // A realistic cap: at origin 0 the map is OctoMap's tree node for node, so its pool follows the file's
-  // size, and a cost that follows the volume instead is a finding, as is needing the cap at all.
-  pcl::fot::io::OctoMapImportOptions options;
-  options.max_pool_bytes = std::size_t(256) << 20;
-  const char* bytes = reinterpret_cast<const char*>(data);
-  std::optional<pcl::fot::FastOctTree> tree;
-  try {
-    tree.emplace(pcl::fot::io::decodeOt(bytes, size, "fuzz.ot", options));
-  } catch (const pcl::fot::io::FormatError&) {
-    return 0;
-  }
-  if (tree->getMemoryBytes() > 64 * size + 4096) std::abort();
-  const std::string again = pcl::fot::io::encodeBt(*tree);
-  if (!(pcl::fot::io::decodeBt(again.data(), again.size()) == *tree)) std::abort();
-  // One cell off OctoMap's grid, a large cube splits along its surface: the same cells, or a refusal.
-  if (size == 0 || !(data[size - 1] & 1)) return 0;
-  options.origin[0] = tree->getResolution();
-  options.max_pool_bytes = std::size_t(16) << 20;
-  try {
-    const pcl::fot::FastOctTree moved = pcl::fot::io::decodeOt(bytes, size, "fuzz.ot", options);
-    if (moved.getOccupiedCount() != tree->getOccupiedCount() || moved.getFreeCount() != tree->getFreeCount())
-      std::abort();
-  } catch (const pcl::fot::MemoryLimitError&) {
-  }
-  return 0;
+  return checkOctoMapImport(data, size, [](const char* bytes, std::size_t n, const auto& options) {
+    return pcl::fot::io::decodeOt(bytes, n, "fuzz.ot", options);
+  });
 }

@@ -95,18 +95,18 @@ pcl::fot::FastOctTree mapOfCloud(const std::string& input, const Arguments& args
   return tree;
 }
 
-/** The input map, by its extension. */
+/** The input map, by its extension, of at most max_bytes. */
 pcl::fot::FastOctTree readInput(const std::string& input, const Arguments& args,
-                                const std::vector<double>& origin) {
+                                const std::vector<double>& origin, std::size_t max_bytes) {
   const std::string in_ext = extension(input);
   if (in_ext == ".pcd" || in_ext == ".ply") return mapOfCloud(input, args, origin);
   if (in_ext == ".bt" || in_ext == ".ot") {
     pcl::fot::io::OctoMapImportOptions options;
     std::copy(origin.begin(), origin.end(), options.origin);
-    options.max_pool_bytes = maxMemory(args);
+    options.max_pool_bytes = max_bytes;
     return in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
   }
-  if (in_ext == ".fot") return pcl::fot::io::loadFot(input, maxMemory(args));
+  if (in_ext == ".fot") return pcl::fot::io::loadFot(input, max_bytes);
   throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
 }
 
@@ -149,11 +149,12 @@ int main(int argc, char** argv) {
     pcl::fot::io::VoxelExportOptions exported;
     exported.include_free = args.has("-free");
     exported.coloring = coloring(args, out_ext);
+    const std::size_t max_bytes = maxMemory(args);
 
     TicToc timer;
     timer.tic();
-    const pcl::fot::FastOctTree tree = readInput(input, args, origin);
-    const std::string what = writeOutput(tree, output, out_ext, exported, maxMemory(args));
+    const pcl::fot::FastOctTree tree = readInput(input, args, origin, max_bytes);
+    const std::string what = writeOutput(tree, output, out_ext, exported, max_bytes);
     print_info("Wrote %s (%s: %llu occupied, %llu free cells) in %.0f ms\n", output.c_str(), what.c_str(),
                (unsigned long long)tree.getOccupiedCount(), (unsigned long long)tree.getFreeCount(),
                timer.toc());

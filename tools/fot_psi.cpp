@@ -71,8 +71,8 @@ void checkKept(const char* which, const std::string& path, std::size_t points,
 
 int main(int argc, char** argv) {
   return runTool("fot_psi", "fot_psi a b [options]", [&] {
-    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads", "-max_memory"}, {"-free", "-h", "--help"}, 2,
-                         2);
+    const Arguments args(argc, argv, {"-res", "-transform", "-cap", "-threads", "-max_memory"},
+                         {"-free", "-h", "--help"}, 2, 2);
     if (args.helpAsked()) {
       printHelp("fot_psi");
       return kExitOk;
@@ -97,8 +97,9 @@ int main(int argc, char** argv) {
     // A point cloud takes the grid of a map beside it, unless -res is given; two clouds take -res.
     const std::string paths[2] = {args.positional()[0], args.positional()[1]};
     std::optional<pcl::fot::FastOctTree> maps[2];
+    const std::size_t max_bytes = maxMemory(args);
     for (int i = 0; i < 2; ++i)
-      if (isMapFile(paths[i])) maps[i] = loadMap(paths[i], maxMemory(args));
+      if (isMapFile(paths[i])) maps[i] = loadMap(paths[i], max_bytes);
     if (maps[0] && transformed) throw ToolError(kExitUsage, "-transform moves a point cloud, and a is a map");
     pcl::fot::CellGrid cloud_grid(res);
     if (!args.has("-res") && (maps[0] || maps[1])) cloud_grid = (maps[0] ? maps[0] : maps[1])->getGrid();

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 #include <boost/crc.hpp>
 
@@ -52,12 +51,8 @@ constexpr std::int64_t kLegacyOffset = 0x2AAA;
 
 /** A version-1 map read as today's sits 0x2AAA cells off on each axis: its cells, moved back. */
 FastOctTree fromLegacyCoordinates(const FastOctTree& read, std::size_t max_pool_bytes) {
-  FastOctTree tree(read.getGrid());
-  tree.setMaxMemoryBytes(max_pool_bytes);
   const std::int64_t shift[3] = {-kLegacyOffset, -kLegacyOffset, -kLegacyOffset};
-  copyShifted(read, tree, shift);
-  tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
-  return tree;
+  return shiftedCopy(read, read.getGrid(), shift, max_pool_bytes);
 }
 
 std::uint32_t crc32(const char* data, std::size_t size) {

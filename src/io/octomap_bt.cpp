@@ -140,15 +140,13 @@ std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes) {
             std::to_string(kCentre) + " cells either side of coordinate 0)");
   });
   // Staging keys are OctoMap keys less 32768, those of the map itself at origin 0: then no copy is needed.
-  const bool at_zero = shift_to_octomap[0] == kCentre && shift_to_octomap[1] == kCentre &&
-                       shift_to_octomap[2] == kCentre;
+  const bool at_zero =
+      shift_to_octomap[0] == kCentre && shift_to_octomap[1] == kCentre && shift_to_octomap[2] == kCentre;
   std::optional<FastOctTree> moved;
   if (!at_zero) {
     const std::int64_t shift[3] = {shift_to_octomap[0] - kCentre, shift_to_octomap[1] - kCentre,
                                    shift_to_octomap[2] - kCentre};
-    moved.emplace(res);
-    moved->setMaxMemoryBytes(max_pool_bytes);
-    copyShifted(tree, *moved, shift);
+    moved.emplace(shiftedCopy(tree, CellGrid(res), shift, max_pool_bytes));
   }
   const FastOctTree& staging = at_zero ? tree : *moved;
 

@@ -1,12 +1,12 @@
 #include "io/octomap_format.h"
 
-#include "io/region_copy.h"
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "io/region_copy.h"
 
 namespace pcl {
 namespace fot {
@@ -86,13 +86,10 @@ FastOctTree placeStaging(FastOctTree staging, double res, const OctoMapImportOpt
     staging.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
     return staging;
   }
-  FastOctTree tree(CellGrid(res, options.origin[0], options.origin[1], options.origin[2]));
-  tree.setMaxMemoryBytes(options.max_pool_bytes);
   const std::int64_t shift[3] = {-std::int64_t(origin_cells[0]), -std::int64_t(origin_cells[1]),
                                  -std::int64_t(origin_cells[2])};
-  copyShifted(staging, tree, shift);
-  tree.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
-  return tree;
+  return shiftedCopy(staging, CellGrid(res, options.origin[0], options.origin[1], options.origin[2]), shift,
+                     options.max_pool_bytes);
 }
 
 }  // namespace octomap_format

@@ -1,6 +1,7 @@
 #pragma once
 // Private to the library: a tree's regions copied into another tree at shifted keys, at a cost checked first.
 
+#include <cstddef>
 #include <cstdint>
 
 #include <pcl_fot/tree/fast_oct_tree.h>
@@ -16,12 +17,14 @@ namespace io {
 double boxCubes(const Key& lo, const Key& hi);
 
 /**
- * Copies every known region of `from` into `to`, keys shifted by `shift`. A region whose cube is aligned
- * after the shift is one word; one that is not costs its surface. Throws std::invalid_argument if a cell
- * would leave the key range, and MemoryLimitError, saying about how much the copy needs, before it writes
- * anything if that passes `to`'s cap (and, while it writes, if the copy does).
+ * A tree on `grid` holding every known region of `from`, keys shifted by `shift`. A region whose cube is
+ * aligned after the shift is one word; one that is not costs its surface. Throws std::invalid_argument if a
+ * cell would leave the key range, and MemoryLimitError, saying about how much the copy needs, before it
+ * writes anything if that passes max_pool_bytes (and, while it writes, if the copy does). The copy returned
+ * has no cap.
  */
-void copyShifted(const FastOctTree& from, FastOctTree& to, const std::int64_t shift[3]);
+FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std::int64_t shift[3],
+                        std::size_t max_pool_bytes);
 
 }  // namespace io
 }  // namespace fot

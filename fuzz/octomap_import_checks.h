@@ -1,0 +1,43 @@
+#pragma once
+// What the .bt and .ot import fuzz targets check, given the decoder of their format.
+
+#include <cstdint>
+#include <cstdlib>
+#include <optional>
+#include <string>
+
+#include <pcl_fot/io/octomap.h>
+
+/**
+ * Every input is refused (FormatError) or loads a map whose pool follows the file's size and that exports to
+ * .bt and imports back equal; moved a cell off OctoMap's grid it holds the same cells or is refused past the
+ * cap (MemoryLimitError). `decode(bytes, size, options)` is the importer.
+ */
+template <typename Decode>
+int checkOctoMapImport(const std::uint8_t* data, std::size_t size, Decode&& decode) {
+  // A realistic cap: at origin 0 the map is OctoMap's tree node for node, so its pool follows the file's
+  // size, and a cost that follows the volume instead is a finding, as is needing the cap at all.
+  pcl::fot::io::OctoMapImportOptions options;
+  options.max_pool_bytes = std::size_t(256) << 20;
+  const char* bytes = reinterpret_cast<const char*>(data);
+  std::optional<pcl::fot::FastOctTree> tree;
+  try {
+    tree.emplace(decode(bytes, size, options));
+  } catch (const pcl::fot::io::FormatError&) {
+    return 0;
+  }
+  if (tree->getMemoryBytes() > 64 * size + 4096) std::abort();
+  const std::string again = pcl::fot::io::encodeBt(*tree);
+  if (!(pcl::fot::io::decodeBt(again.data(), again.size()) == *tree)) std::abort();
+  // One cell off OctoMap's grid, a large cube splits along its surface: the same cells, or a refusal.
+  if (size == 0 || !(data[size - 1] & 1)) return 0;
+  options.origin[0] = tree->getResolution();
+  options.max_pool_bytes = std::size_t(16) << 20;
+  try {
+    const pcl::fot::FastOctTree moved = decode(bytes, size, options);
+    if (moved.getOccupiedCount() != tree->getOccupiedCount() || moved.getFreeCount() != tree->getFreeCount())
+      std::abort();
+  } catch (const pcl::fot::MemoryLimitError&) {
+  }
+  return 0;
+}
