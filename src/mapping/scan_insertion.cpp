@@ -3,12 +3,14 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include <pcl_fot/detail/bits.h>
 #include <pcl_fot/tree/accessor.h>
 
 #include "mapping/block_ray_walker.h"
+#include "mapping/scan_cells.h"
 
 namespace pcl {
 namespace fot {
@@ -73,6 +75,7 @@ class TreeWriter {
 
   void freeCell(const Key& k) { accessor_.setValidCell(k, CellState::Free); }
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
+  void finish() {}
 
  private:
   /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
@@ -134,9 +137,60 @@ class GridWriter {
   void occupied(const Key& k) {
     if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
   }
+  void finish() {}
 
  private:
   FastOccMesh& grid_;
+};
+
+/**
+ * The log-odds rule. The scan's cells are gathered first, each once (ScanCells), and then updated a leaf at
+ * a time: a miss for each passed cell, a hit for each endpoint's. A miss on a settled free cell changes
+ * nothing, so when the tree reports a settled free cube around a leaf, the blocks after it that lie in that
+ * cube and have no endpoint are passed over: the last visited node answers for them.
+ */
+class LogOddsWriter {
+ public:
+  LogOddsWriter(FastOctTree& t, bool line_burst, std::size_t rays)
+      : accessor_(t, line_burst), cells_(rays < 1024 ? 1024 : rays) {}
+
+  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint32_t block[3];
+      walker.block(walker.blockKey(i), block);
+      cells_.pass(block, walker.cells(i));
+    }
+  }
+  void finishFree(const detail::BlockRayWalker&) {}
+  void freeCell(const Key& k) { cells_.pass(k); }
+  void occupied(const Key& k) { cells_.hit(k); }
+
+  void finish() {
+    std::uint32_t cube[3] = {0, 0, 0};
+    unsigned cube_shift = 32;  // no cube yet
+    for (const detail::ScanCells::Block& b : cells_.blocks()) {
+      const std::uint64_t miss = b.passed & ~b.hit;
+      if (b.hit == 0 && cube_shift < 32 &&
+          ((b.at[0] ^ cube[0]) | (b.at[1] ^ cube[1]) | (b.at[2] ^ cube[2])) >> cube_shift == 0)
+        continue;
+      for (std::uint64_t p = miss | b.hit; p != 0;) {
+        const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(p));
+        const unsigned skip = accessor_.updateLeaf(detail::block_cells::leafKey(b.at, leaf),
+                                                   detail::block_cells::leafMask(miss, leaf),
+                                                   detail::block_cells::leafMask(b.hit, leaf));
+        p &= ~detail::block_cells::leafBits(leaf);
+        if (skip >= 2 && b.hit == 0) {  // a settled free cube of whole blocks: this one and those in it
+          cube_shift = skip - 2;
+          for (int a = 0; a < 3; ++a) cube[a] = b.at[a];
+          break;
+        }
+      }
+    }
+  }
+
+ private:
+  Accessor accessor_;
+  detail::ScanCells cells_;
 };
 
 /** A ray may step one cell past its end keys; keep those cells inside the key range too. */
@@ -164,12 +218,28 @@ ScanStats insert(Writer& writer, const CellGrid& grid, const float sensor[3], co
   };
   std::vector<Key> endpoints;
   endpoints.reserve(count);
+  std::unordered_set<Key, KeyHash> seen;  // the cells of the points so far, with discretize
   const char* bytes = reinterpret_cast<const char*>(xyz);
   for (std::size_t i = 0; i < count; ++i) {
     const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       ++stats.non_finite;
       continue;
+    }
+    float centre[3];
+    if (options.discretize) {  // OctoMap's computeDiscreteUpdate: each cell once, its centre as a float
+      Key k;
+      if (!grid.pointToKey(p[0], p[1], p[2], k)) {
+        ++stats.out_of_range;
+        continue;
+      }
+      if (!seen.insert(k).second) {
+        ++stats.merged;
+        continue;
+      }
+      const std::int32_t key[3] = {k.x, k.y, k.z};
+      for (unsigned a = 0; a < 3; ++a) centre[a] = float(grid.keyToCoord(key[a], a));
+      p = centre;
     }
     // OctoMap's arithmetic: a float difference, its squared norm summed in float.
     const float d[3] = {p[0] - sensor[0], p[1] - sensor[1], p[2] - sensor[2]};
@@ -208,6 +278,7 @@ ScanStats insert(Writer& writer, const CellGrid& grid, const float sensor[3], co
   // Endpoints last: within a scan, occupied wins over free.
   for (const Key& k : endpoints) writer.occupied(k);
   stats.occupied = endpoints.size();
+  writer.finish();
   return stats;
 }
 
@@ -215,12 +286,19 @@ ScanStats insert(Writer& writer, const CellGrid& grid, const float sensor[3], co
 
 ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, std::size_t count,
                      std::size_t stride_bytes, const ScanOptions& options) {
+  if (options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds) {
+    LogOddsWriter writer(map, options.line_burst, count);
+    return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+  }
   TreeWriter writer(map, options.line_burst, count);
   return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
 }
 
 ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, std::size_t count,
                      std::size_t stride_bytes, const ScanOptions& options) {
+  if (options.rule == UpdateRule::LogOdds)
+    throw std::invalid_argument(
+        "pcl::fot::insertRays: the dense grid keeps no log-odds; use the Binary rule");
   GridWriter writer(map);
   return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
 }

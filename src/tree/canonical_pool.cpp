@@ -1,21 +1,30 @@
 // The tree's canonical pool: what the .fot format stores, and its validation when read back.
 #include <pcl_fot/tree/fast_oct_tree.h>
 
+#include <cmath>
 #include <string>
 
 namespace pcl {
 namespace fot {
 namespace {
 
-/** Appends word w's subtree in pre-order; references are renumbered to the blocks as they are appended. */
-NodeWord appendSubtree(const NodeWord* words, NodeWord w, std::vector<NodeWord>& out) {
-  if (node::isBitmap(w)) return w;
-  const std::size_t at = out.size();
-  const std::uint32_t block = std::uint32_t(at / 8);
-  out.resize(at + 8);
+/**
+ * Appends the subtree of the word at pool offset `at` in pre-order, and the values of its flagged leaves;
+ * references are renumbered to the blocks as they are appended.
+ */
+NodeWord appendSubtree(const FastOctTree& tree, std::size_t at, FastOctTree::CanonicalPool& out) {
+  const NodeWord w = tree.words()[at];
+  if (node::isBitmap(w)) {
+    if (node::hasValues(w))
+      for (unsigned o = 0; o < 8; ++o) out.values.push_back(tree.leafValue(at, o));
+    return w;
+  }
+  const std::size_t first = out.words.size();
+  const std::uint32_t block = std::uint32_t(first / 8);
+  out.words.resize(first + 8);
   for (unsigned o = 0; o < 8; ++o) {
-    const NodeWord child = appendSubtree(words, words[node::childOffset(w, o)], out);
-    out[at + o] = child;
+    const NodeWord child = appendSubtree(tree, node::childOffset(w, o), out);
+    out.words[first + o] = child;
   }
   return node::reference(block);
 }
@@ -23,7 +32,8 @@ NodeWord appendSubtree(const NodeWord* words, NodeWord w, std::vector<NodeWord>&
 /** Checks a pool in pre-order and counts its cells; throws std::invalid_argument at the first flaw. */
 class PoolCheck {
  public:
-  explicit PoolCheck(const std::vector<NodeWord>& words) : words_(words) {}
+  PoolCheck(const std::vector<NodeWord>& words, const std::vector<float>& values, const SensorModel& model)
+      : words_(words), values_(values), model_(model) {}
 
   void word(const NodeView& n) {
     if (n.isBitmap()) {
@@ -47,6 +57,7 @@ class PoolCheck {
   }
 
   std::uint32_t blocksSeen() const { return next_block_ - 1; }
+  std::size_t valuesSeen() const { return next_value_; }
   std::uint64_t count(CellState s) const { return counts_[std::size_t(s)]; }
 
   [[noreturn]] static void fail(const std::string& what) {
@@ -57,8 +68,9 @@ class PoolCheck {
   void bitmap(const NodeView& n) {
     const NodeWord w = n.word;
     const std::uint32_t states = w >> node::kStateShift;
-    if ((w & 0xFFFEu) != 0) fail("a bitmap word has spare bits set");
+    if ((w & 0xFFFCu) != 0) fail("a bitmap word has spare bits set");
     if ((states & (states >> 1) & 0x5555u) != 0) fail("a bitmap word holds an invalid state");
+    if (node::hasValues(w)) leafValues(n);
     const std::uint32_t known =
         node::octantMask(w, CellState::Free) | node::octantMask(w, CellState::Occupied);
     if (!known) return;
@@ -80,7 +92,30 @@ class PoolCheck {
     }
   }
 
+  /** A flagged leaf's 8 values: NaN where the state is unknown, else finite and thresholded to the state. */
+  void leafValues(const NodeView& n) {
+    if (n.level != 1) fail("a word above the leaves is flagged as carrying values");
+    if (values_.size() - next_value_ < 8) fail("the values end before the last flagged leaf");
+    bool settled = true;
+    for (unsigned o = 0; o < 8; ++o) {
+      const float v = values_[next_value_ + o];
+      const CellState s = node::state(n.word, o);
+      if (std::isnan(v) != (s == CellState::Unknown))
+        fail("a flagged leaf's value and state disagree on whether a cell is known");
+      if (s == CellState::Unknown) continue;
+      if (!std::isfinite(v)) fail("a log-odds is infinite");
+      if ((model_.occupied(v) ? CellState::Occupied : CellState::Free) != s)
+        fail("a flagged leaf's state is not its value thresholded");
+      settled = settled && model_.settled(v);
+    }
+    if (settled) fail("a flagged leaf has no cell between the clamps");
+    next_value_ += 8;
+  }
+
   const std::vector<NodeWord>& words_;
+  const std::vector<float>& values_;
+  const SensorModel& model_;
+  std::size_t next_value_ = 0;
   std::uint32_t next_block_ = 1;
   std::uint64_t counts_[3] = {0, 0, 0};
 };
@@ -98,6 +133,7 @@ bool minimalRoot(const std::vector<NodeWord>& words, NodeWord root, unsigned lev
 
 FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   CanonicalPool pool;
+  pool.model = model_;
   pool.words.assign(8, 0);
   if (empty()) {
     pool.words[0] = node::uniform(CellState::Unknown);
@@ -107,7 +143,13 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   pool.root_level = root.level;
   pool.root_base = root.corner;
   pool.words.reserve(8 * (1 + live_blocks_));
-  pool.words[0] = appendSubtree(words_.data(), root.word, pool.words);
+  pool.values.reserve(8 * value_blocks_);
+  std::size_t at = 0;  // the content root's offset, found down its corner
+  for (NodeView n = this->root(); n.level > root.level;
+       n = n.child(words_.data(), root.corner.octant(n.level)))
+    at = node::childOffset(n.word, root.corner.octant(n.level));
+  pool.words[0] =
+      node::isBitmap(root.word) && !node::hasValues(root.word) ? root.word : appendSubtree(*this, at, pool);
   return pool;
 }
 
@@ -128,16 +170,25 @@ FastOctTree FastOctTree::fromCanonicalPool(const CellGrid& grid, CanonicalPool p
     if (words[i] != 0) PoolCheck::fail("block 0 must hold the root word and seven zero words");
   const NodeWord root = words[0];
   // A reference's block must exist before the walk follows it, and a root reference is checked as any other.
-  PoolCheck check(words);
+  if (pool.values.size() / 8 > words.size() || pool.values.size() % 8 != 0)
+    PoolCheck::fail("the values are not whole leaves of 8");
+  if ((words.size() + pool.values.size()) * sizeof(float) > max_bytes)
+    throw MemoryLimitError("pcl::fot::FastOctTree::fromCanonicalPool: the values need " +
+                           std::to_string(pool.values.size() * sizeof(float)) +
+                           " bytes more, beyond the cap of " + std::to_string(max_bytes));
+  PoolCheck check(words, pool.values, pool.model);
   check.word(NodeView{root, level, pool.root_base});
   if (check.blocksSeen() != words.size() / 8 - 1)
     PoolCheck::fail("the pool holds blocks that no word refers to");
+  if (check.valuesSeen() != pool.values.size()) PoolCheck::fail("the pool holds values that no leaf has");
   if (root == node::uniform(CellState::Unknown) ? (level != 1 || pool.root_base != TreeCoord())
                                                 : !minimalRoot(words, root, level))
     PoolCheck::fail("the root is not the smallest cube holding the known cells");
 
   FastOctTree tree(grid);
+  tree.model_ = pool.model;
   tree.words_ = std::move(pool.words);
+  tree.installValues(std::move(pool.values));
   tree.root_level_ = level;
   tree.base_ = pool.root_base;
   tree.live_blocks_ = tree.words_.size() / 8 - 1;

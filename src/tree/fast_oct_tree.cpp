@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include <pcl_fot/tree/accessor.h>
@@ -120,7 +121,7 @@ void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
     if (state == CellState::Unknown) {  // nothing is known outside the root
       if (root_in_cube) {
         ++version_;
-        releaseSubtree(words_[0], root_level_);
+        releaseSubtree(0, root_level_);
         words_[0] = node::uniform(CellState::Unknown);
       }
       return;
@@ -136,7 +137,7 @@ void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
   const std::uint64_t cells = node::cellsIn(1, level);
   ++version_;
   if (level == root_level_) {  // the cube is the root
-    releaseSubtree(words_[0], root_level_);
+    releaseSubtree(0, root_level_);
     words_[0] = node::uniform(state);
     if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
     return;
@@ -169,19 +170,21 @@ void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
     return;
   }
   path[level] = node::childOffset(parent, o);
-  releaseSubtree(words_[path[level]], level);
+  releaseSubtree(path[level], level);
   words_[path[level]] = node::uniform(state);
   if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
   collapseFrom(path, level);
 }
 
-void FastOctTree::releaseSubtree(NodeWord w, unsigned level) {
+void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
+  const NodeWord w = words_[at];
   if (node::isBitmap(w)) {
     for (CellState s : {CellState::Free, CellState::Occupied})
       counts_[std::size_t(s)] -= node::cellsIn(node::popcount(node::octantMask(w, s)), level - 1);
+    releaseValues(at);
     return;
   }
-  for (unsigned o = 0; o < 8; ++o) releaseSubtree(words_[node::childOffset(w, o)], level - 1);
+  for (unsigned o = 0; o < 8; ++o) releaseSubtree(node::childOffset(w, o), level - 1);
   freeBlock(node::block(w));
 }
 
@@ -193,7 +196,8 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   if (n <= free_blocks_) return;
   const std::size_t fresh = n - free_blocks_;
   const std::size_t blocks = words_.size() / 8 + fresh;
-  const std::size_t bytes = blocks * 8 * sizeof(NodeWord);
+  const std::size_t bytes =
+      blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) + values_.size() * sizeof(float);
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
                            " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");
@@ -202,6 +206,7 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   if (blocks * 8 > words_.capacity()) {
     const std::size_t cap_words = max_bytes_ / sizeof(NodeWord);
     words_.reserve(std::max(blocks * 8, std::min(words_.capacity() * 2, cap_words)));
+    if (!value_of_.empty()) value_of_.reserve(words_.capacity());
   }
 }
 
@@ -215,6 +220,7 @@ std::uint32_t FastOctTree::allocBlock() {
   }
   const std::uint32_t block = std::uint32_t(words_.size() / 8);
   words_.resize(words_.size() + 8);  // within the capacity reserveBlocks made
+  if (!value_of_.empty()) value_of_.resize(words_.size());
   return block;
 }
 
@@ -253,6 +259,7 @@ void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z,
       const std::size_t first = std::size_t(block) * 8;
       std::fill_n(words_.begin() + first, 8, node::uniform(CellState::Unknown));
       words_[first + octant] = root;
+      if (node::hasValues(root)) value_of_[first + octant] = value_of_[0];
       words_[0] = node::reference(block);
     }
     ++root_level_;
@@ -303,6 +310,11 @@ void FastOctTree::clear() {
   free_blocks_ = 0;
   live_blocks_ = 0;
   counts_ = {0, 0, 0};
+  value_of_.clear();
+  value_of_.shrink_to_fit();
+  std::vector<float>().swap(values_);
+  std::vector<std::uint32_t>().swap(free_values_);
+  value_blocks_ = 0;
   ++version_;
 }
 
@@ -323,21 +335,41 @@ NodeView FastOctTree::contentRoot() const {
 
 namespace {
 
-bool sameSubtree(const FastOctTree& a, NodeWord wa, const FastOctTree& b, NodeWord wb) {
-  if (node::isBitmap(wa) || node::isBitmap(wb)) return wa == wb;
-  for (unsigned o = 0; o < 8; ++o)
-    if (!sameSubtree(a, a.words()[node::childOffset(wa, o)], b, b.words()[node::childOffset(wb, o)]))
-      return false;
+/** The pool offset of a content root's word: found again from the root, down its corner. */
+std::size_t contentOffset(const FastOctTree& t, const NodeView& n) {
+  std::size_t at = 0;
+  for (NodeView v = t.root(); v.level > n.level; v = v.child(t.words(), n.corner.octant(v.level)))
+    at = node::childOffset(v.word, n.corner.octant(v.level));
+  return at;
+}
+
+bool sameSubtree(const FastOctTree& a, std::size_t at_a, NodeWord wa, const FastOctTree& b, std::size_t at_b,
+                 NodeWord wb) {
+  if (node::isBitmap(wa) || node::isBitmap(wb)) {
+    if (wa != wb) return false;
+    if (!node::hasValues(wa)) return true;
+    for (unsigned o = 0; o < 8; ++o) {
+      const float va = a.leafValue(at_a, o), vb = b.leafValue(at_b, o);
+      if (std::memcmp(&va, &vb, sizeof va) != 0) return false;
+    }
+    return true;
+  }
+  for (unsigned o = 0; o < 8; ++o) {
+    const std::size_t ca = node::childOffset(wa, o), cb = node::childOffset(wb, o);
+    if (!sameSubtree(a, ca, a.words()[ca], b, cb, b.words()[cb])) return false;
+  }
   return true;
 }
 
 }  // namespace
 
 bool FastOctTree::operator==(const FastOctTree& other) const {
-  if (grid_ != other.grid_ || counts_ != other.counts_) return false;
+  if (grid_ != other.grid_ || model_ != other.model_ || counts_ != other.counts_) return false;
   if (empty() || other.empty()) return empty() == other.empty();
   const NodeView a = contentRoot(), b = other.contentRoot();
-  return a.level == b.level && a.corner == b.corner && sameSubtree(*this, a.word, other, b.word);
+  // A content root at level 1 is the root word, at offset 0; the offsets matter only for leaves.
+  return a.level == b.level && a.corner == b.corner &&
+         sameSubtree(*this, contentOffset(*this, a), a.word, other, contentOffset(other, b), b.word);
 }
 
 }  // namespace fot

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include <pcl_fot/dense/fast_occ_mesh.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
@@ -16,6 +17,13 @@ struct ScanOptions {
   double min_range = 0.0;
   /** Tree writes go through LineBurstAccess; switch it off only to measure what it is worth. */
   bool line_burst = true;
+  /** The rule for this scan; unset, the map's (FastOctTree::getUpdateRule). The grid knows only Binary. */
+  std::optional<UpdateRule> rule;
+  /**
+   * OctoMap's discretize: points sharing a cell count once, and their rays run to the cell's centre. Fewer
+   * rays, slightly different free cells.
+   */
+  bool discretize = false;
 };
 
 struct ScanStats {
@@ -25,6 +33,7 @@ struct ScanStats {
   std::size_t too_close = 0;     ///< points within min_range, ignored
   std::size_t non_finite = 0;    ///< NaN or Inf points, skipped
   std::size_t out_of_range = 0;  ///< points beyond the key range, skipped
+  std::size_t merged = 0;        ///< points whose cell an earlier point of the scan had (discretize only)
   std::uint64_t ray_cells = 0;   ///< cells the rays pass, each a Free write for the grid; endpoints excluded
 };
 
@@ -32,11 +41,15 @@ struct ScanStats {
  * Inserts one scan with ray tracing. `xyz` holds `count` points in the map frame, point i's x, y, z at
  * byte offset i * stride_bytes; `sensor` is the sensor's position in the map frame.
  *
- * The rules, the same for the tree and the grid: every cell a ray passes (see traceSegment) becomes free,
- * then every endpoint becomes occupied, so within one scan occupied wins over free. A cell that an earlier
- * scan marked occupied becomes free when a ray now passes through it. The grid skips cells outside its
- * cube. Throws std::invalid_argument for a non-finite sensor position and std::out_of_range for one beyond
- * the key range; bad points are skipped and counted.
+ * The cells are OctoMap's insertPointCloud's: every cell a ray passes (see traceSegment), and every
+ * endpoint's cell; within one scan an endpoint's cell counts as an endpoint only. With the Binary rule, the
+ * paper's, the passed cells become free and the endpoints occupied, whatever they held: the latest scan
+ * wins. With the LogOdds rule each passed cell gets one miss and each endpoint one hit, however many rays
+ * reach it, as OctoMap's updateNode adds them (SensorModel): after the same scans every cell holds
+ * OctoMap's float. The grid knows the binary rule only, and skips cells outside its cube.
+ *
+ * Throws std::invalid_argument for a non-finite sensor position or the LogOdds rule on the grid, and
+ * std::out_of_range for a sensor beyond the key range; bad points are skipped and counted.
  */
 ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, std::size_t count,
                      std::size_t stride_bytes, const ScanOptions& options = {});

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -73,6 +74,11 @@ class BasicAccessor {
     }
     const NodeWord w = tree_->words()[path_[bottom_]];
     if (bottom_ == 1) {
+      if (node::hasValues(w)) {
+        bottom_ = tree_->setLeafStates(path_, mask, state);
+        version_ = tree_->structureVersion();
+        return 0;
+      }
       const NodeWord updated = node::withStates(w, mask, state);
       if (updated == w) return line_burst_ && node::isUniform(w) ? 1 : 0;
       writeLeaf(updated);
@@ -86,6 +92,70 @@ class BasicAccessor {
   }
 
   void eraseCell(const Key& key) { setCell(key, CellState::Unknown); }
+
+  /** The cell's log-odds; NaN for an unknown cell. */
+  float getLogOdds(const Key& key) {
+    const TreeCoord c(key);
+    if (!locate(c[0], c[1], c[2])) return FastOctTree::kUnknownValue;
+    const std::size_t at = path_[bottom_];
+    const unsigned o = c.octant(bottom_);
+    return bottom_ == 1 ? tree_->leafValue(at, o) : tree_->settledValue(node::state(tree_->words()[at], o));
+  }
+
+  /**
+   * One scan's evidence for the 2×2×2 leaf that holds `key`, a valid key: a miss for the cells `miss`
+   * selects and a hit for those of `hit` (disjoint masks), by OctoMap's rule (SensorModel). Returns what
+   * setValidLeafCells() returns: a level l > 0 when nothing changed because the uniform cube of level l
+   * around the key is settled in the direction of every update, so a sweep may skip it.
+   */
+  unsigned updateLeaf(const Key& key, std::uint32_t miss, std::uint32_t hit) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    const TreeCoord c(key);
+    const std::uint32_t x = c[0], y = c[1], z = c[2];
+    const NodeWord w = reach(x, y, z);
+    if (bottom_ > 1) {
+      const CellState s = node::state(w, c.octant(bottom_));
+      if ((s == CellState::Free && hit == 0) || (s == CellState::Occupied && miss == 0))
+        return line_burst_ ? bottom_ - 1 : 0;
+      expand(x, y, z);
+    } else if (!node::hasValues(w) && (node::octantMask(w, CellState::Free) & miss) == miss &&
+               (node::octantMask(w, CellState::Occupied) & hit) == hit) {
+      return line_burst_ && node::isUniform(w) ? 1 : 0;
+    }
+    const SensorModel& m = tree_->getSensorModel();
+    float update[8];
+    for (unsigned o = 0; o < 8; ++o) update[o] = (hit >> o) & 1u ? m.hitLogOdds() : m.missLogOdds();
+    bottom_ = tree_->updateLeaf(path_, miss | hit, update);
+    version_ = tree_->structureVersion();
+    return 0;
+  }
+
+  /** FastOctTree::updateLogOdds for a valid key, with a finite update. */
+  void updateCell(const Key& key, float update) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::updateCell", key);
+    const TreeCoord c(key);
+    const NodeWord w = reach(c[0], c[1], c[2]);
+    if (bottom_ > 1) {
+      const float v = tree_->settledValue(node::state(w, c.octant(bottom_)));
+      if (!std::isnan(v) && tree_->getSensorModel().pinned(v, update)) return;
+      expand(c[0], c[1], c[2]);
+    }
+    const float update8[8] = {update, update, update, update, update, update, update, update};
+    bottom_ = tree_->updateLeaf(path_, 1u << c.octant(1), update8);
+    version_ = tree_->structureVersion();
+  }
+
+  /** FastOctTree::setLogOdds for a valid key, with a finite value. */
+  void setLogOdds(const Key& key, float value) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::setLogOdds", key);
+    const TreeCoord c(key);
+    reach(c[0], c[1], c[2]);
+    if (bottom_ > 1) expand(c[0], c[1], c[2]);
+    bottom_ = tree_->setLeafValue(path_, c.octant(1), value);
+    version_ = tree_->structureVersion();
+  }
 
   /**
    * Locates the bitmap word whose octant holds `key` and returns its level, or 0 when the key lies outside
@@ -103,6 +173,23 @@ class BasicAccessor {
 
  private:
   static constexpr std::uint64_t kNoPath = ~std::uint64_t(0);
+
+  /** Locates (x, y, z), growing the root to cover it first, and returns the bitmap word holding it. */
+  NodeWord reach(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    if (!locate(x, y, z)) {
+      tree_->growToCover(x, y, z, 0);
+      locate(x, y, z);
+    }
+    return tree_->words()[path_[bottom_]];
+  }
+
+  /** Expands the uniform word at the end of the path down to the leaf of (x, y, z), with room for its values.
+   */
+  void expand(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    tree_->reserveValueBlock();
+    tree_->expandTo(path_, bottom_, x, y, z);
+    bottom_ = 1;
+  }
 
   /** Replaces the leaf word at the end of the path: the tree keeps its counts and canonical form. */
   void writeLeaf(NodeWord updated) {

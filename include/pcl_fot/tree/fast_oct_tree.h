@@ -13,6 +13,7 @@
 #include <pcl_fot/tree/key.h>
 #include <pcl_fot/tree/node_view.h>
 #include <pcl_fot/tree/node_word.h>
+#include <pcl_fot/tree/sensor_model.h>
 
 namespace pcl {
 namespace fot {
@@ -49,6 +50,12 @@ class BasicAccessor;
  * shape depends only on its cells, never on the order of writes. The root grows on demand to cover
  * new keys in any direction.
  *
+ * Every cell also has a log-odds, as in OctoMap (SensorModel). A cell at a clamp is settled and is its
+ * state alone: free at the lower clamp, occupied at the upper. A leaf with a cell between the clamps keeps
+ * its 8 values in a block beside the pool and is flagged (node::kValueFlag); its states are the values
+ * thresholded, so every reader of states sees the thresholded map. Binary writes (setCell, the paper's
+ * rule) settle the cells they write.
+ *
  * Repeated access should go through an Accessor (LineBurstAccess, see accessor.h). Const members are
  * safe to call from many threads at once; writes need exclusive access.
  */
@@ -63,6 +70,37 @@ class FastOctTree {
 
   const CellGrid& getGrid() const { return grid_; }
   double getResolution() const { return grid_.resolution(); }
+
+  const SensorModel& getSensorModel() const { return model_; }
+  /**
+   * Throws std::logic_error if the map holds cells and the clamps or the threshold change: its settled
+   * cells are defined by them. The hit and miss probabilities may change at any time.
+   */
+  void setSensorModel(const SensorModel& model);
+  /** The rule scans use unless ScanOptions says otherwise; Binary by default, as before the log-odds. */
+  UpdateRule getUpdateRule() const { return rule_; }
+  void setUpdateRule(UpdateRule rule) { rule_ = rule; }
+
+  /** The cell's log-odds; NaN for an unknown cell. */
+  float getLogOdds(const Key& key) const;
+  /** The cell's occupancy probability, OctoMap's probability(log-odds); NaN for an unknown cell. */
+  double getProbability(const Key& key) const;
+  /**
+   * OctoMap's updateNode(key, update): the log-odds plus `update`, clamped, unless the value has reached the
+   * clamp the update heads for. An unknown cell starts at 0. Throws std::out_of_range for an invalid key and
+   * std::invalid_argument for a non-finite update.
+   */
+  void updateLogOdds(const Key& key, float update);
+  /** Sets the cell's log-odds as given (OctoMap's setNodeValue); throws as updateLogOdds for bad input. */
+  void setLogOdds(const Key& key, float log_odds);
+  /** Known cells whose log-odds lies strictly between the clamps. */
+  std::uint64_t getUnsettledCount() const;
+
+  /**
+   * Adds the evidence of `other` into this map: every cell `other` knows gets its log-odds as an
+   * update (updateLogOdds). Throws std::invalid_argument, changing nothing, if the grids differ.
+   */
+  void merge(const FastOctTree& other);
 
   /** Unknown outside the mapped extent. */
   CellState getCell(const Key& key) const;
@@ -116,8 +154,13 @@ class FastOctTree {
   std::size_t getBlockCount() const { return live_blocks_; }
   /** Node words in use: the root plus 8 per block. */
   std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
-  /** Every byte the tree holds: the object and the pool's allocation, free blocks included. */
-  std::size_t getMemoryBytes() const { return sizeof(*this) + words_.capacity() * sizeof(NodeWord); }
+  /** Leaves whose cells carry values: each takes a block of 8 floats. */
+  std::size_t getValueBlockCount() const { return value_blocks_; }
+  /** Every byte the tree holds: the object, the pool and the values, free blocks included. */
+  std::size_t getMemoryBytes() const {
+    return sizeof(*this) + (words_.capacity() + value_of_.capacity() + values_.capacity()) * 4 +
+           free_values_.capacity() * sizeof(std::uint32_t);
+  }
   /** Root level: the root spans 2^depth cells per axis. */
   unsigned getDepth() const { return root_level_; }
 
@@ -131,7 +174,7 @@ class FastOctTree {
   /** Removes every cell and releases the pool. */
   void clear();
 
-  /** Same grid and the same state in every cell. */
+  /** Same grid, sensor model, and the same state and log-odds in every cell. */
   bool operator==(const FastOctTree& other) const;
   bool operator!=(const FastOctTree& other) const { return !(*this == other); }
 
@@ -144,6 +187,9 @@ class FastOctTree {
     unsigned root_level = 1;
     TreeCoord root_base;
     std::vector<NodeWord> words;
+    /** The 8 log-odds of each flagged leaf, in pre-order; NaN for unknown cells. */
+    std::vector<float> values;
+    SensorModel model;
   };
   CanonicalPool canonicalPool() const;
 
@@ -151,8 +197,10 @@ class FastOctTree {
    * The tree a canonical pool describes, checked in full before it is built: the root's level and
    * alignment, block 0's padding, every reference (to the next block in pre-order, never from level 1, no
    * block left over), every bitmap (spare bits clear, no invalid state), canonical form (no block of 8
-   * uniform words, a minimal root), every known cell within the key range, and the pool's size against
-   * max_bytes. Throws std::invalid_argument naming the first violation.
+   * uniform words, a minimal root), every known cell within the key range, every flagged leaf's values
+   * (NaN exactly where the state is unknown, finite and thresholded to the state elsewhere, one unsettled
+   * at least), and the pool's size against max_bytes. Throws std::invalid_argument naming the first
+   * violation.
    */
   static FastOctTree fromCanonicalPool(const CellGrid& grid, CanonicalPool pool,
                                        std::size_t max_bytes = std::numeric_limits<std::size_t>::max());
@@ -169,6 +217,17 @@ class FastOctTree {
    */
   NodeView contentRoot() const;
   std::size_t poolWords() const { return words_.size(); }
+  /** The log-odds of cell o of the leaf word at pool offset `at` (a level-1 word of the pool). */
+  float leafValue(std::size_t at, unsigned o) const {
+    const NodeWord w = words_[at];
+    return node::hasValues(w) ? values_[8 * std::size_t(value_of_[at]) + o] : settledValue(node::state(w, o));
+  }
+  /** The log-odds a settled cell of this state holds; NaN for Unknown. */
+  float settledValue(CellState s) const {
+    return s == CellState::Free ? model_.clampMinLogOdds()
+                                : (s == CellState::Occupied ? model_.clampMaxLogOdds() : kUnknownValue);
+  }
+  static constexpr float kUnknownValue = std::numeric_limits<float>::quiet_NaN();
   /** Changes whenever blocks are allocated, freed or re-linked; accessors restart from the root then. */
   std::uint64_t structureVersion() const { return version_; }
 
@@ -198,13 +257,33 @@ class FastOctTree {
    * uniform. Returns the level of the bitmap word now holding the leaf's cells.
    */
   unsigned writeLeaf(const std::size_t* path, NodeWord updated);
+  /**
+   * The leaf at path[1] (a level-1 word) with cells `mask` updated by OctoMap's rule, cell o by update[o].
+   * Returns the level now holding the leaf's cells, as writeLeaf.
+   */
+  unsigned updateLeaf(const std::size_t* path, std::uint32_t mask, const float* update);
+  /** Writes cells `mask` of the leaf at path[1] to `state`, settled. */
+  unsigned setLeafStates(const std::size_t* path, std::uint32_t mask, CellState state);
+  /** Sets cell o of the leaf at path[1] to `value`. */
+  unsigned setLeafValue(const std::size_t* path, unsigned o, float value);
+  /** Writes a leaf's 8 values (NaN: unknown) as its word and, if a cell is unsettled, its value block. */
+  unsigned commitLeaf(const std::size_t* path, const float (&v)[8]);
+  void leafValues(std::size_t at, float (&v)[8]) const;
+  /** Makes room for one more value block, or throws MemoryLimitError before anything changes. */
+  void reserveValueBlock();
+  void releaseValues(std::size_t at);
+  /** Gives the flagged leaves, in pre-order, the value blocks of `values` (a canonical pool's). */
+  void installValues(std::vector<float> values);
   /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
   unsigned collapseFrom(const std::size_t* path, unsigned level);
   /** Writes the aligned cube of 2^level cells per axis whose corner is c. */
   void setCube(const TreeCoord& c, unsigned level, CellState state);
 
-  /** Frees the blocks below word w, of level `level`, and takes its cells out of the counts. */
-  void releaseSubtree(NodeWord w, unsigned level);
+  /** Frees the blocks below the word at pool offset `at`, of level `level`, and takes its cells out of the
+   * counts. */
+  void releaseSubtree(std::size_t at, unsigned level);
+  /** Adds `update` to every cell of the aligned cube at c, whole uniform cubes at once where it can. */
+  void updateCube(const TreeCoord& c, unsigned level, float update);
 
   /** Visits the cells of a cube in Morton order, the order a fully expanded tree would give. */
   template <typename Visitor>
@@ -223,6 +302,14 @@ class FastOctTree {
   std::size_t max_bytes_ = std::numeric_limits<std::size_t>::max();
   std::uint64_t version_ = 0;
   std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
+  SensorModel model_;
+  UpdateRule rule_ = UpdateRule::Binary;
+  // Values of flagged leaves: value_of_[offset] is the value block of the leaf word at that pool offset
+  // (sized with the pool once a first block exists), and block b is values_[8b .. 8b+7].
+  std::vector<std::uint32_t> value_of_;
+  std::vector<float> values_;
+  std::vector<std::uint32_t> free_values_;
+  std::size_t value_blocks_ = 0;
 };
 
 inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {

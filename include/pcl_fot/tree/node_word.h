@@ -12,8 +12,10 @@ namespace fot {
  * One FastOctTree node: a single 32-bit word (paper §II).
  *
  * Tag bit 0 set: a bitmap word. Bits 16..31 hold the states of the node's 8 octants, 2 bits each
- * (octant i at bits 16+2i), and bits 1..15 are zero. At level 1 the octants are voxels: the paper's
- * FOT leaf. Above level 1 each octant is a uniform region.
+ * (octant i at bits 16+2i), and bits 2..15 are zero. At level 1 the octants are voxels: the paper's
+ * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a level-1 word whose
+ * cells carry log-odds between the clamps: the tree keeps their 8 values aside (see FastOctTree). Its
+ * states are the values thresholded, so a reader of states needs no values.
  * Tag bit 0 clear: a reference, the index of the pool block that holds the 8 child words.
  */
 using NodeWord = std::uint32_t;
@@ -22,12 +24,17 @@ static_assert(sizeof(NodeWord) == 4, "a FastOctTree node is exactly one 32-bit w
 namespace node {
 
 constexpr NodeWord kBitmapTag = 1u;
+constexpr NodeWord kValueFlag = 2u;
 constexpr unsigned kStateShift = 16;
 /** Largest block index a reference word can hold. */
 constexpr std::uint32_t kMaxBlocks = 0x7FFFFFFFu;
 
 constexpr bool isBitmap(NodeWord w) {
   return (w & kBitmapTag) != 0;
+}
+/** A leaf whose cells carry values: never uniform, so it never folds into its parent. */
+constexpr bool hasValues(NodeWord w) {
+  return (w & (kBitmapTag | kValueFlag)) == (kBitmapTag | kValueFlag);
 }
 constexpr NodeWord reference(std::uint32_t block) {
   return block << 1;
@@ -84,7 +91,7 @@ constexpr NodeWord uniform(CellState s) {
 
 constexpr bool isUniform(NodeWord w) {
   const NodeWord states = w >> kStateShift;
-  return isBitmap(w) && states == (states & 3u) * 0x5555u;
+  return (w & 0xFFFFu) == kBitmapTag && states == (states & 3u) * 0x5555u;
 }
 
 /** The state of a uniform bitmap. */

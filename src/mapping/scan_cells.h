@@ -1,0 +1,53 @@
+#pragma once
+// Private to the library: one scan's cells, each once, for the log-odds rule.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <pcl_fot/tree/key.h>
+#include <pcl_fot/tree/tree_coord.h>
+
+namespace pcl {
+namespace fot {
+namespace detail {
+
+/**
+ * The cells one scan updates, as OctoMap's computeUpdate collects them in its two key sets: every cell a
+ * ray passes, and every endpoint's cell, each once. They are kept a 4×4×4 block at a time (tree coordinates
+ * / 4, cells as block_cells bits), in the order the rays first reach each block, so that writing them in
+ * that order keeps LineBurstAccess's paths short.
+ */
+class ScanCells {
+ public:
+  struct Block {
+    std::uint32_t at[3];
+    std::uint64_t passed = 0;  ///< cells a ray passes
+    std::uint64_t hit = 0;     ///< endpoint cells: they get a hit and no miss
+  };
+
+  explicit ScanCells(std::size_t expected_blocks);
+
+  void pass(const std::uint32_t (&block)[3], std::uint64_t cells) { find(block).passed |= cells; }
+  void pass(const Key& k) { cell(k, &Block::passed); }
+  void hit(const Key& k) { cell(k, &Block::hit); }
+
+  const std::vector<Block>& blocks() const { return blocks_; }
+
+ private:
+  void cell(const Key& k, std::uint64_t Block::*field) {
+    const TreeCoord c(k);
+    const std::uint32_t b[3] = {c[0] >> 2, c[1] >> 2, c[2] >> 2};
+    find(b).*field |= std::uint64_t(1) << ((c[0] & 3u) + 4 * (c[1] & 3u) + 16 * (c[2] & 3u));
+  }
+  Block& find(const std::uint32_t (&b)[3]);
+  void grow();
+
+  std::vector<Block> blocks_;
+  std::vector<std::uint32_t> slots_;  // 1 + index into blocks_, or 0 for an empty slot
+  unsigned bits_ = 10;
+};
+
+}  // namespace detail
+}  // namespace fot
+}  // namespace pcl

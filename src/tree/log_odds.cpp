@@ -1,0 +1,239 @@
+// The tree's log-odds: the values of flagged leaves, their updates, and merging maps.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include <pcl_fot/tree/accessor.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+namespace {
+
+void checkFinite(const char* where, float v) {
+  if (!std::isfinite(v)) throw std::invalid_argument(std::string(where) + ": the log-odds is not finite");
+}
+
+}  // namespace
+
+void FastOctTree::setSensorModel(const SensorModel& model) {
+  const bool same_cells = model.clampMinLogOdds() == model_.clampMinLogOdds() &&
+                          model.clampMaxLogOdds() == model_.clampMaxLogOdds() &&
+                          model.occupancyLogOdds() == model_.occupancyLogOdds();
+  if (!same_cells && !empty())
+    throw std::logic_error(
+        "pcl::fot::FastOctTree::setSensorModel: the clamps and the threshold define the settled cells; "
+        "change them only on an empty map");
+  model_ = model;
+}
+
+float FastOctTree::getLogOdds(const Key& key) const {
+  return ConstAccessor(*this, false).getLogOdds(key);
+}
+
+double FastOctTree::getProbability(const Key& key) const {
+  return SensorModel::probability(getLogOdds(key));
+}
+
+void FastOctTree::updateLogOdds(const Key& key, float update) {
+  checkFinite("pcl::fot::FastOctTree::updateLogOdds", update);
+  Accessor(*this, false).updateCell(key, update);
+}
+
+void FastOctTree::setLogOdds(const Key& key, float log_odds) {
+  checkFinite("pcl::fot::FastOctTree::setLogOdds", log_odds);
+  Accessor(*this, false).setLogOdds(key, log_odds);
+}
+
+std::uint64_t FastOctTree::getUnsettledCount() const {
+  std::uint64_t n = 0;
+  auto walk = [&](auto& self, std::size_t at, unsigned level) -> void {
+    const NodeWord w = words_[at];
+    if (node::isBitmap(w)) {
+      if (!node::hasValues(w)) return;
+      for (unsigned o = 0; o < 8; ++o) {
+        const float v = leafValue(at, o);
+        n += !std::isnan(v) && !model_.settled(v);
+      }
+      return;
+    }
+    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o), level - 1);
+  };
+  walk(walk, 0, root_level_);
+  return n;
+}
+
+void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
+  const NodeWord w = words_[at];
+  if (node::hasValues(w)) {
+    std::memcpy(v, &values_[8 * std::size_t(value_of_[at])], sizeof v);
+    return;
+  }
+  for (unsigned o = 0; o < 8; ++o) v[o] = settledValue(node::state(w, o));
+}
+
+void FastOctTree::installValues(std::vector<float> values) {
+  values_ = std::move(values);
+  value_blocks_ = values_.size() / 8;
+  if (values_.empty()) return;
+  value_of_.assign(words_.size(), 0);
+  std::uint32_t next = 0;
+  auto walk = [&](auto& self, std::size_t at) -> void {
+    const NodeWord w = words_[at];
+    if (node::isBitmap(w)) {
+      if (node::hasValues(w)) value_of_[at] = next++;
+      return;
+    }
+    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
+  };
+  walk(walk, 0);
+}
+
+void FastOctTree::reserveValueBlock() {
+  if (!free_values_.empty()) return;
+  const std::size_t bytes = (2 * words_.size() + values_.size() + 8) * sizeof(float);
+  if (bytes > max_bytes_)
+    throw MemoryLimitError("pcl::fot::FastOctTree: the pool and its values would need " +
+                           std::to_string(bytes) + " bytes, beyond the cap of " + std::to_string(max_bytes_) +
+                           " bytes");
+  if (value_of_.empty()) {
+    value_of_.reserve(words_.capacity());
+    value_of_.resize(words_.size());
+  }
+  if (values_.size() + 8 > values_.capacity())
+    values_.reserve(std::max(values_.size() + 8, 2 * values_.capacity()));
+}
+
+void FastOctTree::releaseValues(std::size_t at) {
+  if (!node::hasValues(words_[at])) return;
+  free_values_.push_back(value_of_[at]);
+  --value_blocks_;
+}
+
+unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
+  const std::size_t at = path[1];
+  NodeWord w = node::kBitmapTag;
+  bool settled = true;
+  for (unsigned o = 0; o < 8; ++o) {
+    if (std::isnan(v[o])) continue;
+    w = node::withState(w, o, model_.occupied(v[o]) ? CellState::Occupied : CellState::Free);
+    settled = settled && model_.settled(v[o]);
+  }
+  if (!settled) {
+    if (!node::hasValues(words_[at])) {
+      reserveValueBlock();
+      std::uint32_t block;
+      if (!free_values_.empty()) {
+        block = free_values_.back();
+        free_values_.pop_back();
+      } else {
+        block = std::uint32_t(values_.size() / 8);
+        values_.resize(values_.size() + 8);
+      }
+      value_of_[at] = block;
+      ++value_blocks_;
+    }
+    float* to = &values_[8 * std::size_t(value_of_[at])];
+    for (unsigned o = 0; o < 8; ++o) to[o] = std::isnan(v[o]) ? kUnknownValue : v[o];
+    w |= node::kValueFlag;
+  } else {
+    releaseValues(at);
+  }
+  return writeLeaf(path, w);
+}
+
+unsigned FastOctTree::updateLeaf(const std::size_t* path, std::uint32_t mask, const float* update) {
+  float v[8];
+  leafValues(path[1], v);
+  bool changed = false;
+  for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+    const unsigned o = unsigned(__builtin_ctz(m));
+    if (!std::isnan(v[o]) && model_.pinned(v[o], update[o])) continue;
+    v[o] = model_.update(std::isnan(v[o]) ? 0.0f : v[o], update[o]);
+    changed = true;
+  }
+  return changed ? commitLeaf(path, v) : 1;
+}
+
+unsigned FastOctTree::setLeafStates(const std::size_t* path, std::uint32_t mask, CellState state) {
+  float v[8];
+  leafValues(path[1], v);
+  for (unsigned o = 0; o < 8; ++o)
+    if ((mask >> o) & 1u) v[o] = settledValue(state);
+  return commitLeaf(path, v);
+}
+
+unsigned FastOctTree::setLeafValue(const std::size_t* path, unsigned o, float value) {
+  float v[8];
+  leafValues(path[1], v);
+  v[o] = value;
+  return commitLeaf(path, v);
+}
+
+void FastOctTree::updateCube(const TreeCoord& c, unsigned level, float update) {
+  if (level == 0) {
+    Accessor(*this, false).updateCell(c.key(), update);
+    return;
+  }
+  // The cube's cells as this map holds them: one uniform state, or structure to split along.
+  NodeView n = root();
+  const std::uint32_t apart = (c[0] ^ n.corner[0]) | (c[1] ^ n.corner[1]) | (c[2] ^ n.corner[2]);
+  CellState uniform = CellState::Unknown;
+  bool is_uniform = true;
+  if (empty()) {
+    is_uniform = true;
+  } else if (level <= root_level_ && (apart >> root_level_) == 0) {
+    while (n.level > level && !n.isUniform()) n = n.child(words_.data(), c.octant(n.level));
+    is_uniform = n.isUniform();
+    uniform = n.uniformState();
+  } else {
+    is_uniform = (apart >> level) != 0;  // disjoint from the root (unknown), or holding it (split)
+  }
+  if (is_uniform) {
+    const float before = settledValue(uniform);
+    const float after = std::isnan(before)
+                            ? model_.update(0.0f, update)
+                            : (model_.pinned(before, update) ? before : model_.update(before, update));
+    if (model_.settled(after)) {
+      setCube(c, level, model_.occupied(after) ? CellState::Occupied : CellState::Free);
+      return;
+    }
+  }
+  for (unsigned o = 0; o < 8; ++o) updateCube(c.child(o, level - 1), level - 1, update);
+}
+
+void FastOctTree::merge(const FastOctTree& other) {
+  if (other.grid_ != grid_)
+    throw std::invalid_argument(
+        "pcl::fot::FastOctTree::merge: the maps' grids differ (resolution or origin); merge maps of one "
+        "grid");
+  if (&other == this) {
+    const FastOctTree copy(other);
+    merge(copy);
+    return;
+  }
+  auto walk = [&](auto& self, std::size_t at, const NodeView& n) -> void {
+    if (n.isUniform()) {
+      if (n.uniformState() != CellState::Unknown)
+        updateCube(n.corner, n.level, other.settledValue(n.uniformState()));
+      return;
+    }
+    if (n.level == 1 && node::isBitmap(n.word)) {  // a leaf: its cells one by one
+      Accessor accessor(*this, true);
+      for (unsigned o = 0; o < 8; ++o) {
+        const float v =
+            node::hasValues(n.word) ? other.leafValue(at, o) : other.settledValue(node::state(n.word, o));
+        if (!std::isnan(v)) accessor.updateCell(n.corner.child(o, 0).key(), v);
+      }
+      return;
+    }
+    for (unsigned o = 0; o < 8; ++o)
+      self(self, n.isBitmap() ? at : n.childOffset(o), n.child(other.words_.data(), o));
+  };
+  walk(walk, 0, other.root());
+}
+
+}  // namespace fot
+}  // namespace pcl

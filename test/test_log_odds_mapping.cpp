@@ -1,0 +1,249 @@
+// The log-odds rule, checked against OctoMap 1.9 on sequences of scans: every cell's float, bit for bit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include <octomap/OcTree.h>
+#include <Eigen/Geometry>
+
+#include <pcl_fot/mapping/scan_insertion.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+#include "scan_data.h"
+#include "synthetic_scene.h"
+
+namespace {
+
+using namespace pcl::fot;
+
+/** One scan in the map frame: its points (NaN ones kept) and the sensor's position. */
+struct Scan {
+  std::vector<float> xyz;
+  float sensor[3];
+};
+using Sequence = std::vector<Scan>;
+
+Scan placed(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Affine3f& pose) {
+  Scan s;
+  for (const auto& p : cloud) {
+    const Eigen::Vector3f q = pose * p.getVector3fMap();
+    s.xyz.insert(s.xyz.end(), {q.x(), q.y(), q.z()});
+  }
+  const Eigen::Vector3f t = pose.translation();
+  s.sensor[0] = t.x(), s.sensor[1] = t.y(), s.sensor[2] = t.z();
+  return s;
+}
+
+octomap::OcTree octomapOf(const Sequence& scans, double res, bool discretize) {
+  octomap::OcTree tree(res);
+  for (const Scan& s : scans) {
+    octomap::Pointcloud cloud;
+    for (std::size_t i = 0; i < s.xyz.size(); i += 3)
+      if (std::isfinite(s.xyz[i]) && std::isfinite(s.xyz[i + 1]) && std::isfinite(s.xyz[i + 2]))
+        cloud.push_back(s.xyz[i], s.xyz[i + 1], s.xyz[i + 2]);
+    tree.insertPointCloud(cloud, octomap::point3d(s.sensor[0], s.sensor[1], s.sensor[2]), -1.0, false,
+                          discretize);
+  }
+  return tree;
+}
+
+FastOctTree oursOf(const Sequence& scans, double res, bool line_burst, bool discretize) {
+  FastOctTree tree(res);
+  tree.setUpdateRule(UpdateRule::LogOdds);
+  ScanOptions options;
+  options.line_burst = line_burst;
+  options.discretize = discretize;
+  for (const Scan& s : scans) insertRays(tree, s.sensor, s.xyz.data(), s.xyz.size() / 3, 12, options);
+  return tree;
+}
+
+std::uint32_t bits(float v) {
+  std::uint32_t b;
+  std::memcpy(&b, &v, 4);
+  return b;
+}
+
+/** Every cell OctoMap knows has OctoMap's log-odds and state in ours, and ours knows no other cell. */
+void expectSameLogOdds(const octomap::OcTree& om, const FastOctTree& ours) {
+  std::uint64_t cells = 0, unsettled = 0;
+  for (auto it = om.begin_leafs(); it != om.end_leafs(); ++it) {
+    const int side = 1 << (16 - it.getDepth());
+    const octomap::OcTreeKey base = it.getIndexKey();
+    const float want = it->getLogOdds();
+    const CellState state = om.isNodeOccupied(*it) ? CellState::Occupied : CellState::Free;
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+          const Key k{int(base[0]) - 32768 + x, int(base[1]) - 32768 + y, int(base[2]) - 32768 + z};
+          ASSERT_EQ(bits(ours.getLogOdds(k)), bits(want))
+              << toString(k) << ": " << ours.getLogOdds(k) << " where OctoMap has " << want;
+          ASSERT_EQ(ours.getCell(k), state) << toString(k);
+        }
+    cells += std::uint64_t(side) * side * side;
+    if (want != om.getClampingThresMinLog() && want != om.getClampingThresMaxLog())
+      unsettled += side * side * side;
+  }
+  EXPECT_EQ(ours.getFreeCount() + ours.getOccupiedCount(), cells);
+  EXPECT_EQ(ours.getUnsettledCount(), unsettled);
+}
+
+void expectSameAsOctoMap(const Sequence& scans, double res, bool discretize = false) {
+  const octomap::OcTree om = octomapOf(scans, res, discretize);
+  for (bool line_burst : {true, false}) {
+    SCOPED_TRACE(line_burst ? "LineBurstAccess on" : "LineBurstAccess off");
+    expectSameLogOdds(om, oursOf(scans, res, line_burst, discretize));
+  }
+}
+
+Eigen::Affine3f ndtGuess() {
+  return Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) *
+         Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
+}
+
+Sequence roomPair() {
+  return {placed(*pcl_fot_test::loadScan("room_scan1.pcd"), Eigen::Affine3f::Identity()),
+          placed(*pcl_fot_test::loadScan("room_scan2.pcd"), ndtGuess())};
+}
+
+/** A wall 4 m ahead, and a box 2 m ahead in the first scan only: it has moved away by the second. */
+Sequence movingObject() {
+  Sequence scans;
+  for (int s = 0; s < 4; ++s) {
+    Scan scan{{}, {0.0f, 0.0f, 0.5f}};
+    for (int i = -60; i <= 60; ++i)
+      for (int j = -40; j <= 40; ++j) {
+        const float dy = 0.02f * float(i), dz = 0.02f * float(j);
+        const bool box = s == 0 && std::abs(dy - 0.3f) < 0.25f && std::abs(dz) < 0.25f;
+        const float x = box ? 2.0f : 4.0f;
+        scan.xyz.insert(scan.xyz.end(), {x, dy * x, 0.5f + dz * x});
+      }
+    scans.push_back(scan);
+  }
+  return scans;
+}
+
+TEST(LogOddsMapping, RoomPairAtTheNdtTutorialsGuessEqualsOctoMap) {
+  expectSameAsOctoMap(roomPair(), 0.05);
+}
+
+TEST(LogOddsMapping, ThreeKinectFramesEqualOctoMap) {
+  Sequence scans;
+  for (const char* name : {"kinect_capture0001.pcd", "kinect_capture0002.pcd", "kinect_capture0003.pcd"})
+    scans.push_back(placed(*pcl_fot_test::loadScan(name), Eigen::Affine3f::Identity()));
+  expectSameAsOctoMap(scans, 0.02);
+}
+
+TEST(LogOddsMapping, ThreeKinectFramesDiscretizedEqualOctoMap) {
+  Sequence scans;
+  for (const char* name : {"kinect_capture0001.pcd", "kinect_capture0002.pcd", "kinect_capture0003.pcd"})
+    scans.push_back(placed(*pcl_fot_test::loadScan(name), Eigen::Affine3f::Identity()));
+  expectSameAsOctoMap(scans, 0.02, true);
+}
+
+TEST(LogOddsMapping, EmbeddedSyntheticRoomEqualsOctoMap) {
+  Sequence scans;
+  for (const auto& cloud : fot_tools::scanSyntheticRoom()) {
+    const Eigen::Affine3f pose =
+        Eigen::Translation3f(cloud->sensor_origin_.head<3>()) * cloud->sensor_orientation_.normalized();
+    scans.push_back(placed(*cloud, pose));
+  }
+  expectSameAsOctoMap(scans, 0.05);
+}
+
+TEST(LogOddsMapping, OneScanRepeatedUntilItClampsEqualsOctoMap) {
+  const Scan once = placed(*pcl_fot_test::loadScan("room_scan1.pcd"), Eigen::Affine3f::Identity());
+  const Sequence scans(7, once);
+  expectSameAsOctoMap(scans, 0.1);
+  // Five misses or five hits reach a clamp: after three every cell carries a value, after seven none does.
+  const FastOctTree three = oursOf(Sequence(3, once), 0.1, true, false);
+  EXPECT_EQ(three.getUnsettledCount(), three.getFreeCount() + three.getOccupiedCount());
+  EXPECT_EQ(oursOf(scans, 0.1, true, false).getUnsettledCount(), 0u);
+}
+
+TEST(LogOddsMapping, AnObjectThatMovesAwayIsFreedByEvidenceEqualsOctoMap) {
+  const Sequence scans = movingObject();
+  expectSameAsOctoMap(scans, 0.05);
+  const FastOctTree one = oursOf({scans[0]}, 0.05, true, false), all = oursOf(scans, 0.05, true, false);
+  FastOctTree binary(0.05);
+  const Key box{40, 6, 10};  // on the box's face, at (2.0, 0.3, 0.5)
+  EXPECT_EQ(one.getCell(box), CellState::Occupied);
+  EXPECT_EQ(all.getCell(box), CellState::Free) << "three misses outweigh one hit";
+  EXPECT_FLOAT_EQ(all.getLogOdds(box), SensorModel().hitLogOdds() + 3 * SensorModel().missLogOdds());
+}
+
+TEST(LogOddsMapping, BinaryRuleStaysTheLatestScanPerMapOrPerCall) {
+  const Sequence scans = movingObject();
+  FastOctTree per_map(0.05), per_call(0.05);
+  per_call.setUpdateRule(UpdateRule::LogOdds);
+  ScanOptions binary;
+  binary.rule = UpdateRule::Binary;
+  for (const Scan& s : scans) {
+    insertRays(per_map, s.sensor, s.xyz.data(), s.xyz.size() / 3, 12);
+    insertRays(per_call, s.sensor, s.xyz.data(), s.xyz.size() / 3, 12, binary);
+  }
+  EXPECT_TRUE(per_map == per_call);
+  EXPECT_EQ(per_map.getUnsettledCount(), 0u);
+  EXPECT_EQ(per_map.getLogOdds(Key{80, 0, 0}), SensorModel().clampMaxLogOdds()) << "the wall, settled";
+}
+
+TEST(LogOddsMapping, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {
+  const Sequence scans = roomPair();
+  FastOctTree merged = oursOf({scans[0]}, 0.05, true, false);
+  merged.merge(oursOf({scans[1]}, 0.05, true, false));
+  EXPECT_TRUE(merged == oursOf(scans, 0.05, true, false));
+
+  // OctoMap users merge by updateNode(key, value) for each leaf of the other map: the same floats.
+  octomap::OcTree a = octomapOf({scans[0]}, 0.05, false);
+  const octomap::OcTree b = octomapOf({scans[1]}, 0.05, false);
+  for (auto it = b.begin_leafs(); it != b.end_leafs(); ++it) {
+    const int side = 1 << (16 - it.getDepth());
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+          const octomap::OcTreeKey k = it.getIndexKey();
+          a.updateNode(octomap::OcTreeKey(k[0] + x, k[1] + y, k[2] + z), it->getLogOdds());
+        }
+  }
+  expectSameLogOdds(a, merged);
+
+  const FastOctTree before = merged;
+  EXPECT_THROW(merged.merge(FastOctTree(0.1)), std::invalid_argument);
+  EXPECT_THROW(merged.merge(FastOctTree(0.05, 0.01)), std::invalid_argument);
+  EXPECT_TRUE(merged == before);
+}
+
+TEST(SensorModel, OctoMapsDefaultsAndFloats) {
+  const SensorModel m;
+  octomap::OcTree om(0.1);
+  EXPECT_EQ(bits(m.hitLogOdds()), bits(om.getProbHitLog()));
+  EXPECT_EQ(bits(m.missLogOdds()), bits(om.getProbMissLog()));
+  EXPECT_EQ(bits(m.clampMinLogOdds()), bits(om.getClampingThresMinLog()));
+  EXPECT_EQ(bits(m.clampMaxLogOdds()), bits(om.getClampingThresMaxLog()));
+  EXPECT_EQ(bits(m.occupancyLogOdds()), bits(om.getOccupancyThresLog()));
+}
+
+TEST(SensorModel, ValuesThatMakeNoSenseAreRefusedAndNothingChanges) {
+  const double nan = std::nan("");
+  EXPECT_THROW(SensorModel(1.0), std::invalid_argument);
+  EXPECT_THROW(SensorModel(0.7, 0.0), std::invalid_argument);
+  EXPECT_THROW(SensorModel(nan, 0.4), std::invalid_argument);
+  EXPECT_THROW(SensorModel(0.7, 0.4, 0.97, 0.12), std::invalid_argument) << "clamp min above clamp max";
+  EXPECT_THROW(SensorModel(0.4, 0.4), std::invalid_argument) << "a hit that lowers the log-odds";
+  EXPECT_THROW(SensorModel(0.7, 0.6), std::invalid_argument) << "a miss that raises it";
+  EXPECT_THROW(SensorModel(0.7, 0.4, 0.6, 0.971, 0.5), std::invalid_argument)
+      << "the threshold below the clamps";
+
+  FastOctTree tree(0.1);
+  tree.setCell(Key{1, 2, 3}, CellState::Occupied);
+  EXPECT_THROW(tree.setSensorModel(SensorModel(0.7, 0.4, 0.2)), std::logic_error);
+  EXPECT_EQ(tree.getSensorModel(), SensorModel());
+  tree.setSensorModel(SensorModel(0.9, 0.2));  // hit and miss may change
+  EXPECT_FLOAT_EQ(tree.getSensorModel().probHit(), 0.9);
+  EXPECT_THROW(tree.updateLogOdds(Key{0, 0, 0}, std::nanf("")), std::invalid_argument);
+  EXPECT_THROW(tree.setLogOdds(Key{kMaxKey + 1, 0, 0}, 1.0f), std::out_of_range);
+}
+
+}  // namespace
