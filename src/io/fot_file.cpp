@@ -17,7 +17,8 @@ namespace {
 // "\x89FOT\r\n\x1a\n": a high byte, then line endings and a DOS end-of-file, so that a file mangled as text
 // fails at once (the PNG trick).
 constexpr char kMagic[8] = {'\x89', 'F', 'O', 'T', '\r', '\n', '\x1a', '\n'};
-constexpr std::size_t kHeaderBytes = 96;
+constexpr std::size_t kHeaderBytes = 152;
+constexpr std::size_t kV2HeaderBytes = 96;  // versions 1 and 2: no rule, sensor model or values
 constexpr std::size_t kChecksumBytes = 4;
 
 void put32(std::string& out, std::uint32_t v) {
@@ -68,7 +69,7 @@ std::string encodeFot(const FastOctTree& tree) {
   const CellGrid& grid = tree.getGrid();
   const std::uint64_t blocks = pool.words.size() / 8 - 1;
   std::string out(kMagic, sizeof(kMagic));
-  out.reserve(kHeaderBytes + pool.words.size() * 4 + kChecksumBytes);
+  out.reserve(kHeaderBytes + (pool.words.size() + pool.values.size()) * 4 + kChecksumBytes);
   put32(out, kFotVersion);
   put32(out, std::uint32_t(kHeaderBytes));
   putDouble(out, grid.resolution());
@@ -79,7 +80,17 @@ std::string encodeFot(const FastOctTree& tree) {
   put64(out, blocks);
   put64(out, tree.getOccupiedCount());
   put64(out, tree.getFreeCount());
+  put32(out, std::uint32_t(tree.getUpdateRule()));
+  put32(out, 0);
+  const SensorModel& m = pool.model;
+  for (double p : {m.probHit(), m.probMiss(), m.clampMin(), m.clampMax(), m.occupancy()}) putDouble(out, p);
+  put64(out, pool.values.size() / 8);
   for (NodeWord w : pool.words) put32(out, w);
+  for (float v : pool.values) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    put32(out, bits);
+  }
   put32(out, crc32(out.data(), out.size()));
   return out;
 }
@@ -94,11 +105,13 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
     throw fail("it does not start with the .fot magic bytes");
   if (size < 16) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const std::uint32_t version = get32(p + 8), header = get32(p + 12);
-  if (version != kFotVersion && version != kLegacyVersion)
+  if (version < kLegacyVersion || version > kFotVersion)
     throw fail("format version " + std::to_string(version) + "; this build reads versions " +
-               std::to_string(kLegacyVersion) + " and " + std::to_string(kFotVersion));
-  if (header != kHeaderBytes) throw fail("a header of " + std::to_string(header) + " bytes, not 96");
-  if (size < kHeaderBytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
+               std::to_string(kLegacyVersion) + " to " + std::to_string(kFotVersion));
+  const std::size_t header_bytes = version == kFotVersion ? kHeaderBytes : kV2HeaderBytes;
+  if (header != header_bytes)
+    throw fail("a header of " + std::to_string(header) + " bytes, not " + std::to_string(header_bytes));
+  if (size < header_bytes) throw fail("it ends inside the header (" + std::to_string(size) + " bytes)");
   const double res = getDouble(p + 16), ox = getDouble(p + 24), oy = getDouble(p + 32),
                oz = getDouble(p + 40);
   const std::string bad_grid = CellGrid::whyInvalid(res, ox, oy, oz);
@@ -110,22 +123,45 @@ FastOctTree decodeFot(const char* bytes, std::size_t size, const std::string& na
                       free = get64(p + 88);
   if (blocks > node::kMaxBlocks) throw fail("it claims " + std::to_string(blocks) + " blocks");
   if (nodes != 1 + 8 * blocks) throw fail("the node count does not match the block count");
+  UpdateRule rule = UpdateRule::Binary;
+  std::uint64_t leaves = 0;  // leaves with values
+  if (version == kFotVersion) {
+    const std::uint32_t r = get32(p + 96);
+    if (r > 1) throw fail("the update rule " + std::to_string(r) + " is unknown");
+    if (get32(p + 100) != 0) throw fail("the header's padding after the update rule is not zero");
+    rule = UpdateRule(r);
+    try {
+      pool.model = SensorModel(getDouble(p + 104), getDouble(p + 112), getDouble(p + 120), getDouble(p + 128),
+                               getDouble(p + 136));
+    } catch (const std::invalid_argument& e) {
+      throw fail(e.what());
+    }
+    leaves = get64(p + 144);
+    if (leaves > 8 * (blocks + 1)) throw fail("it claims more leaves with values than its pool has words");
+  }
   // Sizes are checked against the real file before anything is allocated.
-  const std::uint64_t pool_bytes = (blocks + 1) * 32;
-  if (pool_bytes > max_pool_bytes)
-    throw fail("its pool of " + std::to_string(pool_bytes) + " bytes exceeds the loader's cap of " +
-               std::to_string(max_pool_bytes));
-  const std::uint64_t expected = kHeaderBytes + pool_bytes + kChecksumBytes;
+  const std::uint64_t pool_bytes = (blocks + 1) * 32, value_bytes = leaves * 32;
+  if (pool_bytes + value_bytes > max_pool_bytes)
+    throw fail("its pool and values of " + std::to_string(pool_bytes + value_bytes) +
+               " bytes exceed the loader's cap of " + std::to_string(max_pool_bytes));
+  const std::uint64_t expected = header_bytes + pool_bytes + value_bytes + kChecksumBytes;
   if (size != expected)
     throw fail(std::string(size < expected ? "it is truncated: " : "it has trailing bytes: ") +
                std::to_string(size) + " bytes where the header promises " + std::to_string(expected));
   if (crc32(bytes, size - kChecksumBytes) != get32(p + size - kChecksumBytes))
     throw fail("the checksum does not match: the file is corrupted");
   pool.words.resize(std::size_t(blocks + 1) * 8);
-  for (std::size_t i = 0; i < pool.words.size(); ++i) pool.words[i] = get32(p + kHeaderBytes + 4 * i);
+  for (std::size_t i = 0; i < pool.words.size(); ++i) pool.words[i] = get32(p + header_bytes + 4 * i);
+  pool.values.resize(std::size_t(leaves) * 8);
+  const unsigned char* values = p + header_bytes + pool_bytes;
+  for (std::size_t i = 0; i < pool.values.size(); ++i) {
+    const std::uint32_t bits = get32(values + 4 * i);
+    std::memcpy(&pool.values[i], &bits, 4);
+  }
   try {
     FastOctTree tree =
         FastOctTree::fromCanonicalPool(CellGrid(res, ox, oy, oz), std::move(pool), max_pool_bytes);
+    tree.setUpdateRule(rule);
     if (tree.getOccupiedCount() != occupied || tree.getFreeCount() != free)
       throw fail("the cell counts in the header do not match the tree");
     if (version == kLegacyVersion) return fromLegacyCoordinates(tree, max_pool_bytes);

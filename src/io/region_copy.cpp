@@ -39,6 +39,7 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
   struct Box {
     Key lo, hi;
     CellState state;
+    float log_odds;  // a lone cell's, when it is not settled
   };
   std::vector<Box> boxes;
   double cubes = 0;
@@ -52,7 +53,8 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
     const Key l{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])};
     const Key h{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)};
     cubes += boxCubes(l, h);
-    boxes.push_back(Box{l, h, r.state});
+    const float v = r.level == 0 ? from.getLogOdds(r.min_key) : from.settledValue(r.state);
+    boxes.push_back(Box{l, h, r.state, v});
   });
   // A word per cube: copies of shifted cubes measured 0.57 words per cube, in a pool that grows by doubling.
   // Beyond the cap, refuse at once rather than fill memory up to it.
@@ -67,8 +69,15 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
     throw MemoryLimitError(text);
   }
   FastOctTree to(grid);
+  to.setSensorModel(from.getSensorModel());
+  to.setUpdateRule(from.getUpdateRule());
   to.setMaxMemoryBytes(max_pool_bytes);
-  for (const Box& b : boxes) to.setBox(b.lo, b.hi, b.state);
+  for (const Box& b : boxes) {
+    if (from.getSensorModel().settled(b.log_odds))
+      to.setBox(b.lo, b.hi, b.state);
+    else
+      to.setLogOdds(b.lo, b.log_odds);
+  }
   to.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
   return to;
 }

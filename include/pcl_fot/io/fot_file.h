@@ -17,16 +17,20 @@ class FormatError : public std::runtime_error {
 };
 
 /**
- * The .fot format version this build writes. It reads it and version 1, whose tree coordinates were keys +
- * 0x2AAAAAAA (see tree_coord): such a map is moved into today's nodes on loading, within the pool cap.
+ * The .fot format version this build writes: version 2 with the update rule, the sensor model and the
+ * log-odds of unsettled leaves. It reads versions 2 (binary maps, OctoMap's default sensor model) and 1,
+ * whose tree coordinates were keys + 0x2AAAAAAA (see tree_coord): such a map is moved into today's nodes on
+ * loading, within the pool cap.
  */
-constexpr unsigned kFotVersion = 2;
-/** By default a loader refuses pools beyond 4 GiB rather than allocate whatever a file claims. */
+constexpr unsigned kFotVersion = 3;
+/** By default a loader refuses pools (with their values) beyond 4 GiB rather than allocate whatever a file
+ * claims. */
 constexpr std::size_t kDefaultMaxPoolBytes = std::size_t(4) << 30;
 
 /**
  * The .fot bytes of a tree (doc/file_format.md): a little-endian header with the magic, version, grid,
- * root, counts; the canonical pool (FastOctTree::canonicalPool); a CRC-32 of everything before it.
+ * root, counts, update rule and sensor model; the canonical pool and its values
+ * (FastOctTree::canonicalPool); a CRC-32 of everything before it.
  * Equal trees give equal bytes.
  */
 std::string encodeFot(const FastOctTree& tree);
