@@ -3,12 +3,15 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include <octomap/OcTree.h>
 #include <Eigen/Geometry>
 
+#include <pcl_fot/io/octomap.h>
 #include <pcl_fot/mapping/scan_insertion.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
@@ -213,6 +216,41 @@ TEST(LogOddsMapping, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {
   EXPECT_THROW(merged.merge(FastOctTree(0.1)), std::invalid_argument);
   EXPECT_THROW(merged.merge(FastOctTree(0.05, 0.01)), std::invalid_argument);
   EXPECT_TRUE(merged == before);
+}
+
+TEST(LogOddsFiles, OtRoundTripsThroughOctoMapKeepEveryValue) {
+  const Sequence scans = roomPair();
+  const FastOctTree ours = oursOf(scans, 0.05, true, false);
+  // Ours written, OctoMap reads the same value in every leaf.
+  std::istringstream written(io::encodeOt(ours));
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(written));
+  auto* om = dynamic_cast<octomap::OcTree*>(read.get());
+  ASSERT_NE(om, nullptr);
+  expectSameLogOdds(*om, ours);
+  // OctoMap's written, ours reads them all, and writes them back as they came.
+  std::ostringstream theirs;
+  octomapOf(scans, 0.05, false).write(theirs);
+  const std::string bytes = theirs.str();
+  const FastOctTree back = io::decodeOt(bytes.data(), bytes.size());
+  EXPECT_TRUE(back == ours);
+  const std::string again = io::encodeOt(back);
+  EXPECT_TRUE(io::decodeOt(again.data(), again.size()) == ours);
+}
+
+TEST(LogOddsFiles, BtExportIsOctoMapsWriteBinaryByteForByte) {
+  const Sequence scans = movingObject();
+  octomap::OcTree om = octomapOf(scans, 0.05, false);
+  std::ostringstream theirs;
+  om.writeBinary(theirs);  // toMaxLikelihood, prune, write
+  const FastOctTree ours = oursOf(scans, 0.05, true, false);
+  ASSERT_GT(ours.getUnsettledCount(), 0u);
+  EXPECT_EQ(io::encodeBt(ours), theirs.str());
+  FastOctTree settled = ours;
+  settled.toMaxLikelihood();
+  EXPECT_EQ(settled.getUnsettledCount(), 0u);
+  EXPECT_EQ(settled.getValueBlockCount(), 0u);
+  EXPECT_EQ(settled.getOccupiedCount(), ours.getOccupiedCount());
+  EXPECT_EQ(io::encodeBt(settled), theirs.str());
 }
 
 TEST(SensorModel, OctoMapsDefaultsAndFloats) {

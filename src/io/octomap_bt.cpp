@@ -111,44 +111,18 @@ class BtReader {
   std::uint64_t nodes_ = 1;  // the root
 };
 
-/** The shortest decimal that reads back as the same double. */
-std::string exactDecimal(double v) {
-  for (int digits = 6; digits <= 17; ++digits) {
-    std::ostringstream s;
-    s.precision(digits);
-    s << v;
-    if (std::stod(s.str()) == v) return s.str();
-  }
-  return std::to_string(v);
-}
-
 }  // namespace
 
-std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes) {
-  const CellGrid& grid = tree.getGrid();
-  const double res = grid.resolution();
-  const std::int64_t shift_to_octomap[3] = {kCentre + cellsFromZero(grid.origin()[0], res, "x"),
-                                            kCentre + cellsFromZero(grid.origin()[1], res, "y"),
-                                            kCentre + cellsFromZero(grid.origin()[2], res, "z")};
-  tree.forEachRegion([&](const Region& r) {
-    const std::int64_t last = (std::int64_t(1) << r.level) - 1;
-    const std::int64_t k[3] = {r.min_key.x, r.min_key.y, r.min_key.z};
-    for (int a = 0; a < 3; ++a)
-      if (k[a] + shift_to_octomap[a] < 0 || k[a] + last + shift_to_octomap[a] > 65535)
-        throw std::invalid_argument(
-            "pcl::fot::io: the map has cells beyond OctoMap's 65536 cells per axis (" +
-            std::to_string(kCentre) + " cells either side of coordinate 0)");
-  });
-  // Staging keys are OctoMap keys less 32768, those of the map itself at origin 0: then no copy is needed.
-  const bool at_zero =
-      shift_to_octomap[0] == kCentre && shift_to_octomap[1] == kCentre && shift_to_octomap[2] == kCentre;
-  std::optional<FastOctTree> moved;
-  if (!at_zero) {
-    const std::int64_t shift[3] = {shift_to_octomap[0] - kCentre, shift_to_octomap[1] - kCentre,
-                                   shift_to_octomap[2] - kCentre};
-    moved.emplace(shiftedCopy(tree, CellGrid(res), shift, max_pool_bytes));
+std::string encodeBt(const FastOctTree& map, std::size_t max_pool_bytes) {
+  // OctoMap's writeBinary writes the maximum-likelihood map, pruned.
+  std::optional<FastOctTree> settled;
+  if (map.getValueBlockCount() > 0) {
+    settled.emplace(map);
+    settled->toMaxLikelihood();
   }
-  const FastOctTree& staging = at_zero ? tree : *moved;
+  std::optional<FastOctTree> moved;
+  const FastOctTree& staging = *toStaging(settled ? *settled : map, moved, max_pool_bytes);
+  const double res = staging.getResolution();
 
   BtWriter writer(staging);
   if (!staging.empty()) {
@@ -164,12 +138,7 @@ std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes) {
     else
       writer.node(root.word, root.level);
   }
-  std::string out = std::string(kFirstLine) +
-                    "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
-                    "id OcTree\nsize " +
-                    std::to_string(staging.empty() ? 0 : writer.nodes()) + "\nres " + exactDecimal(res) +
-                    "\ndata\n";
-  return out + writer.body();
+  return headerText(kFirstLine, staging.empty() ? 0 : writer.nodes(), res) + writer.body();
 }
 
 void saveBt(const FastOctTree& tree, const std::string& path, std::size_t max_pool_bytes) {

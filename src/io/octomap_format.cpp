@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "io/region_copy.h"
 
@@ -31,6 +32,22 @@ std::int32_t cellsFromZero(double origin, double res, const char* axis) {
     throw std::invalid_argument(text);
   }
   return std::int32_t(whole);
+}
+
+std::string exactDecimal(double v) {
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::ostringstream s;
+    s.precision(digits);
+    s << v;
+    if (std::stod(s.str()) == v) return s.str();
+  }
+  return std::to_string(v);
+}
+
+std::string headerText(const char* first_line, std::uint64_t size, double res) {
+  return std::string(first_line) +
+         "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\nid OcTree\nsize " +
+         std::to_string(size) + "\nres " + exactDecimal(res) + "\ndata\n";
 }
 
 Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file) {
@@ -75,6 +92,31 @@ Header readHeader(const char* bytes, std::size_t size, const char* first_line, c
   if (!bad_grid.empty()) throw fail(bad_grid);
   h.body = at;
   return h;
+}
+
+FastOctTree const* toStaging(const FastOctTree& tree, std::optional<FastOctTree>& moved,
+                             std::size_t max_pool_bytes) {
+  const CellGrid& grid = tree.getGrid();
+  const double res = grid.resolution();
+  const std::int64_t shift_to_octomap[3] = {kCentre + cellsFromZero(grid.origin()[0], res, "x"),
+                                            kCentre + cellsFromZero(grid.origin()[1], res, "y"),
+                                            kCentre + cellsFromZero(grid.origin()[2], res, "z")};
+  tree.forEachRegion([&](const Region& r) {
+    const std::int64_t last = (std::int64_t(1) << r.level) - 1;
+    const std::int64_t k[3] = {r.min_key.x, r.min_key.y, r.min_key.z};
+    for (int a = 0; a < 3; ++a)
+      if (k[a] + shift_to_octomap[a] < 0 || k[a] + last + shift_to_octomap[a] > 65535)
+        throw std::invalid_argument(
+            "pcl::fot::io: the map has cells beyond OctoMap's 65536 cells per axis (" +
+            std::to_string(kCentre) + " cells either side of coordinate 0)");
+  });
+  // Staging keys are OctoMap keys less 32768, those of the map itself at origin 0: then no copy is needed.
+  if (shift_to_octomap[0] == kCentre && shift_to_octomap[1] == kCentre && shift_to_octomap[2] == kCentre)
+    return &tree;
+  const std::int64_t shift[3] = {shift_to_octomap[0] - kCentre, shift_to_octomap[1] - kCentre,
+                                 shift_to_octomap[2] - kCentre};
+  moved.emplace(shiftedCopy(tree, CellGrid(res), shift, max_pool_bytes));
+  return &*moved;
 }
 
 FastOctTree placeStaging(FastOctTree staging, double res, const OctoMapImportOptions& options) {

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -28,6 +29,12 @@ const TreeCoord kStagingRoot(kStagingBase, kStagingBase, kStagingBase);
  */
 std::int32_t cellsFromZero(double origin, double res, const char* axis);
 
+/** The shortest decimal that reads back as the same double: the header's resolution. */
+std::string exactDecimal(double v);
+
+/** OctoMap's header lines before the tree: first line, comment, id, size, res, data. */
+std::string headerText(const char* first_line, std::uint64_t size, double res);
+
 struct Header {
   std::string id;      ///< the tree type; OctoMap's legacy "1" reads as "OcTree"
   std::uint64_t size;  ///< nodes, leaves included
@@ -40,6 +47,13 @@ struct Header {
  * Throws FormatError starting with `what_file` ("'name' is not a valid OctoMap .bt file").
  */
 Header readHeader(const char* bytes, std::size_t size, const char* first_line, const std::string& what_file);
+
+/**
+ * The tree in OctoMap's grid: the map itself at origin 0, else a copy moved there; its cells must lie
+ * within OctoMap's cube (std::invalid_argument otherwise).
+ */
+FastOctTree const* toStaging(const FastOctTree& tree, std::optional<FastOctTree>& moved,
+                             std::size_t max_pool_bytes);
 
 /** The map a staging tree holds, moved to the caller's origin, within the caller's memory cap. */
 FastOctTree placeStaging(FastOctTree staging, double res, const OctoMapImportOptions& options);
@@ -57,6 +71,7 @@ FastOctTree readBody(const char* bytes, std::size_t size, const Header& h,
   cellsFromZero(options.origin[1], h.resolution, "y");
   cellsFromZero(options.origin[2], h.resolution, "z");
   FastOctTree staging(h.resolution);
+  staging.setSensorModel(options.sensor_model);
   staging.setMaxMemoryBytes(options.max_pool_bytes);
   auto reader = make_reader(reinterpret_cast<const unsigned char*>(bytes) + h.body, size - h.body, staging);
   std::uint64_t nodes = 0;

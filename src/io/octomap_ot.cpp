@@ -1,7 +1,14 @@
 #include <pcl_fot/io/octomap.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <pcl_fot/tree/accessor.h>
 
 #include <pcl_fot/io/file_io.h>
 
@@ -40,10 +47,8 @@ class OtReader {
     ++nodes_;
     const std::int32_t side = std::int32_t(1) << (kDepth - depth);
     if (children == 0) {  // a leaf: a voxel, or a pruned cube of them
-      if (std::isnan(log_odds)) throw fail("a leaf's log-odds is not a number");
-      const Key lo = corner.key();
-      staging_.setBox(lo, Key{lo.x + side - 1, lo.y + side - 1, lo.z + side - 1},
-                      log_odds >= 0.0f ? CellState::Occupied : CellState::Free);
+      if (!std::isfinite(log_odds)) throw fail("a leaf's log-odds is not finite");
+      leaf(corner, depth, log_odds);
       return;
     }
     if (depth == kDepth) throw fail("a voxel at the deepest level has children");
@@ -56,6 +61,27 @@ class OtReader {
   FormatError fail(const std::string& what) const { return FormatError(what_file_ + ": " + what); }
 
  private:
+  /** A leaf's cells: one settled cube, or each cell with the value, which a pruned leaf may repeat. */
+  void leaf(const TreeCoord& corner, unsigned depth, float log_odds) {
+    const SensorModel& m = staging_.getSensorModel();
+    const unsigned level = kDepth - depth;
+    const std::int32_t side = std::int32_t(1) << level;
+    const Key lo = corner.key();
+    if (m.settled(log_odds)) {
+      staging_.setBox(lo, Key{lo.x + side - 1, lo.y + side - 1, lo.z + side - 1},
+                      m.occupied(log_odds) ? CellState::Occupied : CellState::Free);
+      return;
+    }
+    const double bytes = std::ldexp(sizeof(float), int(3 * level));
+    if (bytes > double(staging_.getMaxMemoryBytes()))
+      throw MemoryLimitError("pcl::fot::io: a pruned leaf between the clamps spans 2^" +
+                             std::to_string(3 * level) + " cells, whose values pass the memory cap");
+    Accessor cells(staging_);
+    for (std::int32_t z = 0; z < side; ++z)
+      for (std::int32_t y = 0; y < side; ++y)
+        for (std::int32_t x = 0; x < side; ++x) cells.setLogOdds(Key{lo.x + x, lo.y + y, lo.z + z}, log_odds);
+  }
+
   const unsigned char* at_;
   const unsigned char* end_;
   std::size_t data_bytes_;
@@ -64,7 +90,83 @@ class OtReader {
   std::uint64_t nodes_ = 0;
 };
 
+/** Writes a tree's nodes in OctoMap's pre-order: each node's value (its children's maximum), then its child
+ * mask. */
+class OtWriter {
+ public:
+  explicit OtWriter(const FastOctTree& tree) : tree_(tree) {}
+
+  /** The node n, whose word is at pool offset `at` (for a leaf word), and its subtree; returns its value. */
+  float node(const NodeView& n, std::size_t at) {
+    const std::size_t record = put(0.0f);
+    if (n.isUniform()) return patch(record, tree_.settledValue(n.uniformState()), 0);
+    float max = -std::numeric_limits<float>::infinity();
+    unsigned mask = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+      float v;
+      if (n.level == 1) {  // a leaf word's cells
+        v = tree_.leafValue(at, o);
+        if (std::isnan(v)) continue;
+        patch(put(v), v, 0);
+      } else {
+        const NodeView child = n.child(tree_.words(), o);
+        if (child.word == node::uniform(CellState::Unknown)) continue;
+        v = node(child, n.isBitmap() ? 0 : n.childOffset(o));
+      }
+      mask |= 1u << o;
+      max = std::max(max, v);
+    }
+    return patch(record, max, mask);
+  }
+
+  /** An inner node above the map's node, whose only child (octant `o`) leads towards it. */
+  void chain(unsigned o) { chains_.emplace_back(put(0.0f), o); }
+  /** Gives the chain nodes the value of the node they lead to. */
+  void closeChains(float v) {
+    for (const auto& c : chains_) patch(c.first, v, 1u << c.second);
+  }
+
+  const std::string& body() const { return body_; }
+  std::uint64_t nodes() const { return nodes_; }
+
+ private:
+  std::size_t put(float v) {
+    const std::size_t at = body_.size();
+    body_.resize(at + 5);
+    std::memcpy(&body_[at], &v, 4);
+    ++nodes_;
+    return at;
+  }
+  float patch(std::size_t record, float v, unsigned mask) {
+    std::memcpy(&body_[record], &v, 4);
+    body_[record + 4] = char(mask);
+    return v;
+  }
+
+  const FastOctTree& tree_;
+  std::string body_;
+  std::uint64_t nodes_ = 0;
+  std::vector<std::pair<std::size_t, unsigned>> chains_;
+};
+
 }  // namespace
+
+std::string encodeOt(const FastOctTree& tree, std::size_t max_pool_bytes) {
+  std::optional<FastOctTree> moved;
+  const FastOctTree& staging = *toStaging(tree, moved, max_pool_bytes);
+  OtWriter writer(staging);
+  if (!staging.empty()) {
+    const NodeView root = staging.contentRoot();
+    // OctoMap's root is always a node of its own: above the map's node, a chain of single children.
+    for (unsigned level = kDepth; level > root.level; --level) writer.chain(root.corner.octant(level));
+    writer.closeChains(writer.node(root, staging.offsetOf(root)));
+  }
+  return headerText(kFirstLine, writer.nodes(), staging.getResolution()) + writer.body();
+}
+
+void saveOt(const FastOctTree& tree, const std::string& path, std::size_t max_pool_bytes) {
+  writeFileAtomically(path, encodeOt(tree, max_pool_bytes));
+}
 
 FastOctTree decodeOt(const char* bytes, std::size_t size, const std::string& name,
                      const OctoMapImportOptions& options) {

@@ -144,12 +144,9 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   pool.root_base = root.corner;
   pool.words.reserve(8 * (1 + live_blocks_));
   pool.values.reserve(8 * value_blocks_);
-  std::size_t at = 0;  // the content root's offset, found down its corner
-  for (NodeView n = this->root(); n.level > root.level;
-       n = n.child(words_.data(), root.corner.octant(n.level)))
-    at = node::childOffset(n.word, root.corner.octant(n.level));
-  pool.words[0] =
-      node::isBitmap(root.word) && !node::hasValues(root.word) ? root.word : appendSubtree(*this, at, pool);
+  pool.words[0] = node::isBitmap(root.word) && !node::hasValues(root.word)
+                      ? root.word
+                      : appendSubtree(*this, offsetOf(root), pool);
   return pool;
 }
 

@@ -318,6 +318,14 @@ void FastOctTree::clear() {
   ++version_;
 }
 
+std::size_t FastOctTree::offsetOf(const NodeView& n) const {
+  std::size_t at = 0;
+  for (NodeView v = root(); v.level > n.level && !v.isBitmap();
+       v = v.child(words_.data(), n.corner.octant(v.level)))
+    at = v.childOffset(n.corner.octant(v.level));
+  return at;
+}
+
 NodeView FastOctTree::contentRoot() const {
   NodeView n = root();
   while (n.level > 1) {
@@ -334,14 +342,6 @@ NodeView FastOctTree::contentRoot() const {
 }
 
 namespace {
-
-/** The pool offset of a content root's word: found again from the root, down its corner. */
-std::size_t contentOffset(const FastOctTree& t, const NodeView& n) {
-  std::size_t at = 0;
-  for (NodeView v = t.root(); v.level > n.level; v = v.child(t.words(), n.corner.octant(v.level)))
-    at = node::childOffset(v.word, n.corner.octant(v.level));
-  return at;
-}
 
 bool sameSubtree(const FastOctTree& a, std::size_t at_a, NodeWord wa, const FastOctTree& b, std::size_t at_b,
                  NodeWord wb) {
@@ -369,7 +369,7 @@ bool FastOctTree::operator==(const FastOctTree& other) const {
   const NodeView a = contentRoot(), b = other.contentRoot();
   // A content root at level 1 is the root word, at offset 0; the offsets matter only for leaves.
   return a.level == b.level && a.corner == b.corner &&
-         sameSubtree(*this, contentOffset(*this, a), a.word, other, contentOffset(other, b), b.word);
+         sameSubtree(*this, offsetOf(a), a.word, other, other.offsetOf(b), b.word);
 }
 
 }  // namespace fot

@@ -65,6 +65,30 @@ std::uint64_t FastOctTree::getUnsettledCount() const {
   return n;
 }
 
+void FastOctTree::toMaxLikelihood() {
+  if (value_blocks_ == 0) return;
+  settleSubtree(0);
+  ++version_;
+}
+
+NodeWord FastOctTree::settleSubtree(std::size_t at) {
+  NodeWord w = words_[at];
+  if (node::isBitmap(w)) {
+    releaseValues(at);
+    return words_[at] = w & ~node::kValueFlag;
+  }
+  NodeWord folded = node::kBitmapTag;
+  bool uniform = true;
+  for (unsigned o = 0; o < 8; ++o) {
+    const NodeWord child = settleSubtree(node::childOffset(w, o));
+    uniform = uniform && node::isUniform(child);
+    folded = node::withState(folded, o, node::uniformState(child));
+  }
+  if (!uniform) return w;
+  freeBlock(node::block(w));
+  return words_[at] = folded;
+}
+
 void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
   const NodeWord w = words_[at];
   if (node::hasValues(w)) {

@@ -27,19 +27,23 @@ struct OctoMapImportOptions {
   double origin[3] = {0.0, 0.0, 0.0};
   /** The map may not grow beyond this: a hostile file gets MemoryLimitError, not all the memory. */
   std::size_t max_pool_bytes = kDefaultMaxPoolBytes;
+  /** The map's sensor model: its clamps say which of the file's values are settled. */
+  SensorModel sensor_model;
 };
 
 /**
- * The .bt bytes of a tree. OctoMap's log-odds are not carried: a .bt holds maximum-likelihood states only,
- * as this map does. Throws std::invalid_argument, saying why, if the map is not representable. The trees'
- * nodes coincide when the map's origin is 0 (see tree_coord): then the cost follows the tree. At another
- * origin OctoMap's nodes are its nodes moved, and a large cube may split along its surface; a map that
- * needs more than max_pool_bytes for that gets MemoryLimitError, saying how much, before the work.
+ * The .bt bytes of a tree: its maximum-likelihood map, pruned, as OctoMap's writeBinary writes it (a .bt
+ * holds states only; reading one gives cells settled at the clamps). Throws std::invalid_argument, saying
+ * why, if the map is not representable. The trees' nodes coincide when the map's origin is 0 (see
+ * tree_coord): then the cost follows the tree. At another origin OctoMap's nodes are its nodes moved, and a
+ * large cube may split along its surface; a map that needs more than max_pool_bytes for that gets
+ * MemoryLimitError, saying how much, before the work.
  */
 std::string encodeBt(const FastOctTree& tree, std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
 
 /** Writes a .bt file atomically. Throws as encodeBt, and std::runtime_error on I/O errors. */
-void saveBt(const FastOctTree& tree, const std::string& path, std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
+void saveBt(const FastOctTree& tree, const std::string& path,
+            std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
 
 /**
  * The map in .bt bytes, with OctoMap's cells: its resolution from the header, the origin from the options.
@@ -55,12 +59,24 @@ FastOctTree decodeBt(const char* bytes, std::size_t size, const std::string& nam
 FastOctTree loadBt(const std::string& path, const OctoMapImportOptions& options = {});
 
 /**
+ * The .ot bytes of a tree, as OctoMap 1.9's OcTree::write writes them: every node's float log-odds (an inner
+ * node's is its children's maximum) and its child mask, in pre-order. OctoMap reads the same value in every
+ * leaf that this map holds in every cell. Throws as encodeBt.
+ */
+std::string encodeOt(const FastOctTree& tree, std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
+
+/** Writes a .ot file atomically. Throws as encodeOt, and std::runtime_error on I/O errors. */
+void saveOt(const FastOctTree& tree, const std::string& path,
+            std::size_t max_pool_bytes = kDefaultMaxPoolBytes);
+
+/**
  * The map in .ot bytes, from the trees OcTree, OcTreeStamped and ColorOcTree (its colours are dropped).
- * Every leaf becomes free or occupied as OctoMap's isNodeOccupied says with its default threshold,
- * probability 0.5: occupied when its log-odds is at least 0. Throws FormatError, prefixed with `name`, for
- * a malformed file (bad header, another tree type, truncated or excess body, a log-odds that is not a
- * number, a node count that disagrees with the header), std::invalid_argument for an origin off OctoMap's
- * grid, and MemoryLimitError beyond the cap.
+ * Every leaf's log-odds is kept exactly; the options' sensor model thresholds it (occupied at 0 and above,
+ * by default) and says which values are settled. Throws FormatError, prefixed with `name`, for a malformed
+ * file (bad header, another tree type, truncated or excess body, a log-odds that is not finite, a node
+ * count that disagrees with the header), std::invalid_argument for an origin off OctoMap's grid, and
+ * MemoryLimitError beyond the cap (also, at once, for a pruned leaf between the clamps whose cells would
+ * need more).
  */
 FastOctTree decodeOt(const char* bytes, std::size_t size, const std::string& name = "<memory>",
                      const OctoMapImportOptions& options = {});

@@ -95,6 +95,8 @@ class FastOctTree {
   void setLogOdds(const Key& key, float log_odds);
   /** Known cells whose log-odds lies strictly between the clamps. */
   std::uint64_t getUnsettledCount() const;
+  /** OctoMap's toMaxLikelihood(): every cell settles at the clamp of its state, and the values go. */
+  void toMaxLikelihood();
 
   /**
    * Adds the evidence of `other` into this map: every cell `other` knows gets its log-odds as an
@@ -217,6 +219,9 @@ class FastOctTree {
    */
   NodeView contentRoot() const;
   std::size_t poolWords() const { return words_.size(); }
+  /** The pool offset of the word of a node below references only, such as contentRoot(): found from the root
+   * down the node's corner. */
+  std::size_t offsetOf(const NodeView& n) const;
   /** The log-odds of cell o of the leaf word at pool offset `at` (a level-1 word of the pool). */
   float leafValue(std::size_t at, unsigned o) const {
     const NodeWord w = words_[at];
@@ -274,6 +279,8 @@ class FastOctTree {
   void releaseValues(std::size_t at);
   /** Gives the flagged leaves, in pre-order, the value blocks of `values` (a canonical pool's). */
   void installValues(std::vector<float> values);
+  /** toMaxLikelihood below the word at pool offset `at`; returns the word, folded where it became uniform. */
+  NodeWord settleSubtree(std::size_t at);
   /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
   unsigned collapseFrom(const std::size_t* path, unsigned level);
   /** Writes the aligned cube of 2^level cells per axis whose corner is c. */
