@@ -111,7 +111,7 @@ tool_test(Hostile.Leftovers.EveryOutputWhole COMMAND $<TARGET_FILE:fot_map> -res
 set(bt_leaf "${PROJECT_SOURCE_DIR}/test/data/hostile/one_pruned_leaf.bt")
 set(ot_root "${PROJECT_SOURCE_DIR}/test/data/hostile/root_leaf.ot")
 tool_test(Hostile.Cost.PrunedLeafAtDepthTwo COMMAND $<TARGET_FILE:fot_info> "${bt_leaf}"
-          MATCH "occupied cells +4398046511104\n +free cells +0\n +node words +1 in 0 blocks")
+          MATCH "occupied cells +4398046511104\n +free cells +0\n +settled cells +4398046511104 .*\n +unsettled cells +0 .*\n +node words +1 in 0 blocks")
 # Its log-odds, 0.85, lies between the clamps: each of its 2^48 cells would carry it, so it is refused at once.
 tool_test(Hostile.Cost.RootThatIsALeaf COMMAND $<TARGET_FILE:fot_info> "${ot_root}"
           EXIT 2 ONE_LINE_ERROR MATCH "pruned leaf between the clamps spans 2\\^48 cells")

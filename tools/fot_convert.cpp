@@ -1,4 +1,4 @@
-// fot_convert: converts maps between .fot, OctoMap .bt (and .ot in), voxel-centre .pcd and .vtk cube meshes.
+// fot_convert: converts maps between .fot, OctoMap .bt and .ot, voxel-centre .pcd and .vtk cube meshes.
 #include <cmath>
 #include <string>
 
@@ -25,7 +25,8 @@ void printHelp(const char* prog) {
       "Syntax: %s input output [options]\n\n"
       "  input   .fot (pcl_fot map), .bt or .ot (OctoMap binary or full map), or .pcd / .ply (a point\n"
       "          cloud: its points become occupied cells, no ray tracing; needs -res)\n"
-      "  output  .fot, .bt, .pcd (voxel centres for pcl_viewer) or .vtk (voxel cube mesh for pcl_viewer)\n\n"
+      "  output  .fot, .bt (OctoMap's maximum-likelihood map), .ot (OctoMap's full map, with every\n"
+      "          log-odds), .pcd (voxel centres for pcl_viewer) or .vtk (voxel cube mesh for pcl_viewer)\n\n"
       "  -res <m>            voxel edge for a point cloud input\n"
       "  -origin <x,y,z>     map origin for a point cloud, .bt or .ot input (default: 0,0,0); for OctoMap\n"
       "                      maps, a whole number of cells from 0 on each axis\n"
@@ -122,6 +123,10 @@ std::string writeOutput(const pcl::fot::FastOctTree& tree, const std::string& ou
     pcl::fot::io::saveBt(tree, output, max_bytes);
     return "OctoMap map";
   }
+  if (out_ext == ".ot") {
+    pcl::fot::io::saveOt(tree, output, max_bytes);
+    return "OctoMap map with its log-odds";
+  }
   if (out_ext == ".pcd")
     return std::to_string(pcl::fot::io::saveVoxelCentersPCD(tree, output, exported)) + " voxel centres";
   return std::to_string(pcl::fot::io::saveVoxelMeshVTK(tree, output, exported)) + " cube faces";
@@ -140,9 +145,9 @@ int main(int argc, char** argv) {
     const std::string &input = args.positional()[0], &output = args.positional()[1];
     refuseOverwrites({input}, {output});
     const std::string out_ext = extension(output);
-    if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".pcd" && out_ext != ".vtk")
+    if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".ot" && out_ext != ".pcd" && out_ext != ".vtk")
       throw ToolError(kExitUsage,
-                      "cannot write '" + output + "': the output must be .fot, .bt, .pcd or .vtk");
+                      "cannot write '" + output + "': the output must be .fot, .bt, .ot, .pcd or .vtk");
     requireWritableDirectory(output);
     std::vector<double> origin{0, 0, 0};
     args.get("-origin", origin, 3);

@@ -48,8 +48,18 @@ void describe(const std::string& path, std::size_t max_bytes) {
                grid.origin()[2] + (hi.z + 1) * res);
   }
   print_info("  depth           %u levels\n", tree.getDepth());
+  const pcl::fot::SensorModel& m = tree.getSensorModel();
+  print_info("  update rule     %s\n",
+             tree.getUpdateRule() == pcl::fot::UpdateRule::LogOdds ? "log-odds" : "binary");
+  print_info("  sensor model    hit %g, miss %g, clamps %g and %g, occupancy threshold %g\n", m.probHit(),
+             m.probMiss(), m.clampMin(), m.clampMax(), m.occupancy());
   print_info("  occupied cells  %llu\n", (unsigned long long)tree.getOccupiedCount());
   print_info("  free cells      %llu\n", (unsigned long long)tree.getFreeCount());
+  const std::uint64_t unsettled = tree.getUnsettledCount();
+  print_info("  settled cells   %llu (at a clamp)\n",
+             (unsigned long long)(tree.getOccupiedCount() + tree.getFreeCount() - unsettled));
+  print_info("  unsettled cells %llu (log-odds between the clamps, in %zu leaves)\n",
+             (unsigned long long)unsettled, tree.getValueBlockCount());
   print_info("  node words      %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
   print_info("  bytes           %zu in memory\n", tree.getMemoryBytes());
 }

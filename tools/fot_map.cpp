@@ -29,8 +29,11 @@ namespace {
 
 void printHelp(const char* prog) {
   print_info(
-      "Builds a FastOctTree occupancy map from range scans with ray tracing: the cells along every ray\n"
-      "become free, the endpoints occupied. Each scan's pose (sensor in the map frame) is its VIEWPOINT\n"
+      "Builds a FastOctTree occupancy map from range scans with ray tracing, as OctoMap's insertPointCloud\n"
+      "does: each cell along a ray gets a miss and each endpoint a hit, added to the cell's clamped\n"
+      "log-odds, and a cell is occupied from the threshold up. With -binary, the paper's rule instead: the\n"
+      "cells along every ray become free, the endpoints occupied, and the latest scan wins. Each scan's pose "
+      "(sensor in the map frame) is its VIEWPOINT\n"
       "(a PLY file's camera element), or a line of the pose file. Without scans, it maps the embedded\n"
       "default: a synthetic furnished room seen by a depth camera from six poses. Scans whose rays would\n"
       "cross more than 1e10 cells, which usually means a missing pose, are refused before any tracing\n"
@@ -40,6 +43,10 @@ void printHelp(const char* prog) {
       "  -poses <file>     one pose per scan, in order: tx ty tz qw qx qy qz per line ('#' comments)\n"
       "  -max_range <m>    rays longer than this mark free space up to it and no endpoint (default: none)\n"
       "  -min_range <m>    points closer to the sensor are ignored (default: 0)\n"
+      "  -binary           the paper's rule, the latest scan wins, instead of the log-odds\n"
+      "  -hit <p>          probability of a hit (default: 0.7), -miss <p> of a miss (default: 0.4)\n"
+      "  -clamp_min <p>    clamping thresholds (defaults: 0.1192, 0.971), -clamp_max <p>\n"
+      "  -occupancy <p>    occupancy threshold (default: 0.5)\n"
       "  -out <prefix>     output prefix (default: fot_map); writes <prefix>.fot, <prefix>_occupied.pcd\n"
       "                    (voxel centres coloured by height) and <prefix>_mesh.vtk (voxel cubes)\n"
       "  -free             also write <prefix>_states.pcd: occupied and free voxel centres, coloured by "
@@ -139,6 +146,23 @@ void checkScans(const std::vector<Cloud::Ptr>& scans, const std::vector<Eigen::A
   }
 }
 
+/** The sensor model the options give, OctoMap's defaults otherwise. */
+pcl::fot::SensorModel sensorModel(const Arguments& args) {
+  const pcl::fot::SensorModel defaults;
+  double hit = defaults.probHit(), miss = defaults.probMiss(), clamp_min = defaults.clampMin(),
+         clamp_max = defaults.clampMax(), occupancy = defaults.occupancy();
+  args.get("-hit", hit);
+  args.get("-miss", miss);
+  args.get("-clamp_min", clamp_min);
+  args.get("-clamp_max", clamp_max);
+  args.get("-occupancy", occupancy);
+  try {
+    return pcl::fot::SensorModel(hit, miss, clamp_min, clamp_max, occupancy);
+  } catch (const std::invalid_argument& e) {
+    throw ToolError(kExitUsage, e.what());
+  }
+}
+
 /** Traces every scan into the map, with a progress bar; returns the totals. */
 pcl::fot::ScanStats mapScans(pcl::fot::FastOctTree& tree, const std::vector<Cloud::Ptr>& scans,
                              const std::vector<Eigen::Affine3f>& poses, const pcl::fot::ScanOptions& options,
@@ -182,8 +206,13 @@ void writeOutputs(const pcl::fot::FastOctTree& tree, const std::string& out, boo
              total.rays, (unsigned long long)total.ray_cells, total.non_finite, total.out_of_range);
   print_info("  resolution         %g m\n", tree.getResolution());
   print_info("  depth              %u levels\n", tree.getDepth());
+  print_info("  update rule        %s\n", tree.getUpdateRule() == pcl::fot::UpdateRule::LogOdds
+                                              ? "log-odds (OctoMap's sensor model)"
+                                              : "binary (the latest scan wins)");
   print_info("  occupied cells     %llu\n", (unsigned long long)tree.getOccupiedCount());
   print_info("  free cells         %llu\n", (unsigned long long)tree.getFreeCount());
+  print_info("  unsettled cells    %llu (log-odds between the clamps)\n",
+             (unsigned long long)tree.getUnsettledCount());
   print_info("  node words         %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
   print_info("  memory             %zu bytes\n", tree.getMemoryBytes());
   print_info("Wrote %s (the map), %s (%zu voxel centres) and %s (%zu faces)\n", map_file.c_str(),
@@ -203,8 +232,10 @@ void writeOutputs(const pcl::fot::FastOctTree& tree, const std::string& out, boo
 
 int main(int argc, char** argv) {
   return runTool("fot_map", "fot_map [options] [scan1.pcd|.ply scan2.pcd ...]", [&] {
-    const Arguments args(argc, argv, {"-res", "-poses", "-max_range", "-min_range", "-out"},
-                         {"-free", "-h", "--help"});
+    const Arguments args(argc, argv,
+                         {"-res", "-poses", "-max_range", "-min_range", "-out", "-hit", "-miss", "-clamp_min",
+                          "-clamp_max", "-occupancy"},
+                         {"-free", "-binary", "-h", "--help"});
     if (args.helpAsked()) {
       printHelp("fot_map");
       return kExitOk;
@@ -241,6 +272,8 @@ int main(int argc, char** argv) {
     const pcl::fot::CellGrid grid(res);
     checkScans(scans, poses, grid, options);
     pcl::fot::FastOctTree tree(grid);
+    tree.setSensorModel(sensorModel(args));
+    tree.setUpdateRule(args.has("-binary") ? pcl::fot::UpdateRule::Binary : pcl::fot::UpdateRule::LogOdds);
     const pcl::fot::ScanStats total = mapScans(tree, scans, poses, options, timer);
     writeOutputs(tree, out, args.has("-free"), scans.size(), total);
     print_info("Done in %.0f ms\n", timer.toc());
