@@ -133,7 +133,11 @@ void FastOctTree::reserveValueBlock() {
 void FastOctTree::releaseValues(std::size_t at) {
   if (!node::hasValues(words_[at])) return;
   free_values_.push_back(value_of_[at]);
-  --value_blocks_;
+  if (--value_blocks_ > 0) return;
+  // Every cell settled, as a scan repeated until it clamps leaves them: the map is as small as a binary one.
+  std::vector<std::uint32_t>().swap(value_of_);
+  std::vector<float>().swap(values_);
+  std::vector<std::uint32_t>().swap(free_values_);
 }
 
 unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {

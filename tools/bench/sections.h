@@ -14,6 +14,8 @@ std::string benchSearch(const std::vector<BenchScan>& scans, int repeats);
 /** PCL's features, surface, segmentation and registration algorithms with KdTree and with FastOctTreeSearch.
  */
 std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats);
+/** Sequences of scans by the log-odds and binary rules, next to OctoMap's insertPointCloud. */
+std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats);
 /** Also plots Fig. 5 into plot_file (PNG, with gnuplot), which the Markdown links by its file name. */
 std::string benchPsi(const std::vector<BenchScan>& scans, int repeats, int dmap_repeats,
                      const std::string& plot_file);
