@@ -30,7 +30,7 @@ int checkOctoMapImport(const std::uint8_t* data, std::size_t size, Decode&& deco
   } catch (const pcl::fot::MemoryLimitError&) {
     return 0;
   }
-  if (tree->getValueBlockCount() == 0 && tree->getMemoryBytes() > 64 * size + 4096) std::abort();
+  if (tree->getValueLeafCount() == 0 && tree->getMemoryBytes() > 64 * size + 4096) std::abort();
   const std::string again = pcl::fot::io::encodeBt(*tree);
   pcl::fot::FastOctTree settled = *tree;
   settled.toMaxLikelihood();

@@ -11,6 +11,7 @@
 #include <octomap/OcTree.h>
 #include <Eigen/Geometry>
 
+#include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap.h>
 #include <pcl_fot/mapping/scan_insertion.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
@@ -249,8 +250,43 @@ TEST(LogOddsFiles, BtExportIsOctoMapsWriteBinaryByteForByte) {
   settled.toMaxLikelihood();
   EXPECT_EQ(settled.getUnsettledCount(), 0u);
   EXPECT_EQ(settled.getValueBlockCount(), 0u);
+  EXPECT_EQ(settled.getValueLeafCount(), 0u);
   EXPECT_EQ(settled.getOccupiedCount(), ours.getOccupiedCount());
   EXPECT_EQ(io::encodeBt(settled), theirs.str());
+}
+
+TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
+  FastOctTree tree(0.1);
+  // 20000 leaves, one cell each, each its own value: the palette (16383 values) fills, blocks take the rest.
+  std::vector<float> values;
+  for (int i = 0; i < 20000; ++i) {
+    values.push_back(-1.9f + 3.0f * float(i) / 20000.0f);
+    tree.setLogOdds(Key{2 * (i % 100), 2 * (i / 100), 0}, values.back());
+  }
+  // One leaf with two values needs a block; -0.0 and 0.0 are different floats.
+  tree.setLogOdds(Key{1000, 0, 0}, 0.0f);
+  tree.setLogOdds(Key{1001, 0, 0}, -0.0f);
+  EXPECT_EQ(tree.getValueLeafCount(), 20001u);
+  EXPECT_GT(tree.getValueBlockCount(), 20000u - 16383u);
+  EXPECT_LT(tree.getValueBlockCount(), 20001u - 16000u);
+  const std::string bytes = io::encodeFot(tree);
+  const FastOctTree back = io::decodeFot(bytes.data(), bytes.size());
+  const FastOctTree* both[] = {&tree, &back};
+  for (const FastOctTree* t : both) {
+    for (int i = 0; i < 20000; ++i)
+      ASSERT_EQ(bits(t->getLogOdds(Key{2 * (i % 100), 2 * (i / 100), 0})), bits(values[i])) << i;
+    EXPECT_EQ(bits(t->getLogOdds(Key{1000, 0, 0})), bits(0.0f));
+    EXPECT_EQ(bits(t->getLogOdds(Key{1001, 0, 0})), bits(-0.0f));
+    EXPECT_TRUE(std::isnan(t->getLogOdds(Key{1, 0, 0})));
+  }
+  EXPECT_TRUE(back == tree);
+  EXPECT_EQ(io::encodeFot(back), bytes);
+  // A block leaf that settles, and a palette leaf that settles, give their storage back.
+  tree.setCell(Key{1000, 0, 0}, CellState::Occupied);
+  tree.setCell(Key{1001, 0, 0}, CellState::Occupied);
+  tree.setCell(Key{0, 0, 0}, CellState::Free);
+  EXPECT_EQ(tree.getValueLeafCount(), 19999u);
+  EXPECT_EQ(tree.getLogOdds(Key{0, 0, 0}), SensorModel().clampMinLogOdds());
 }
 
 TEST(SensorModel, OctoMapsDefaultsAndFloats) {

@@ -116,7 +116,7 @@ class BtReader {
 std::string encodeBt(const FastOctTree& map, std::size_t max_pool_bytes) {
   // OctoMap's writeBinary writes the maximum-likelihood map, pruned.
   std::optional<FastOctTree> settled;
-  if (map.getValueBlockCount() > 0) {
+  if (map.getValueLeafCount() > 0) {
     settled.emplace(map);
     settled->toMaxLikelihood();
   }

@@ -28,7 +28,11 @@ class ScanCells {
 
   explicit ScanCells(std::size_t expected_blocks);
 
-  void pass(const std::uint32_t (&block)[3], std::uint64_t cells) { find(block).passed |= cells; }
+  /** The index of a block, added if new: it stays valid while cells are added. */
+  std::uint32_t index(const std::uint32_t (&block)[3]) {
+    return std::uint32_t(&find(block) - blocks_.data());
+  }
+  void pass(std::uint32_t index, std::uint64_t cells) { blocks_[index].passed |= cells; }
   void pass(const Key& k) { cell(k, &Block::passed); }
   void hit(const Key& k) { cell(k, &Block::hit); }
 

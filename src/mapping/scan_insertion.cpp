@@ -152,13 +152,20 @@ class GridWriter {
 class LogOddsWriter {
  public:
   LogOddsWriter(FastOctTree& t, bool line_burst, std::size_t rays)
-      : accessor_(t, line_burst), cells_(rays < 1024 ? 1024 : rays) {}
+      : accessor_(t, line_burst), cells_(rays < 1024 ? 1024 : rays), recent_(kRecent) {}
 
   void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) {
-      std::uint32_t block[3];
-      walker.block(walker.blockKey(i), block);
-      cells_.pass(block, walker.cells(i));
+      // Neighbouring rays cross the same blocks: a small table of the walker's block keys, in cache,
+      // answers most stretches before the scan's table is probed.
+      const std::uint64_t key = walker.blockKey(i);
+      Recent& r = recent_[(key * 0x9E3779B97F4A7C15u) >> (64 - kRecentBits)];
+      if (r.key != key) {
+        std::uint32_t block[3];
+        walker.block(key, block);
+        r = Recent{key, cells_.index(block)};
+      }
+      cells_.pass(r.index, walker.cells(i));
     }
   }
   void finishFree(const detail::BlockRayWalker&) {}
@@ -189,8 +196,16 @@ class LogOddsWriter {
   }
 
  private:
+  struct Recent {
+    std::uint64_t key = ~std::uint64_t(0);  // no block has this key
+    std::uint32_t index = 0;
+  };
+  static constexpr unsigned kRecentBits = 12;
+  static constexpr std::size_t kRecent = std::size_t(1) << kRecentBits;
+
   Accessor accessor_;
   detail::ScanCells cells_;
+  std::vector<Recent> recent_;
 };
 
 /** A ray may step one cell past its end keys; keep those cells inside the key range too. */

@@ -17,7 +17,7 @@ NodeWord appendSubtree(const FastOctTree& tree, std::size_t at, FastOctTree::Can
   if (node::isBitmap(w)) {
     if (node::hasValues(w))
       for (unsigned o = 0; o < 8; ++o) out.values.push_back(tree.leafValue(at, o));
-    return w;
+    return w & ~node::kPaletteMask;  // palette indices follow the order of updates: the pool holds values
   }
   const std::size_t first = out.words.size();
   const std::uint32_t block = std::uint32_t(first / 8);

@@ -182,6 +182,7 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
     for (CellState s : {CellState::Free, CellState::Occupied})
       counts_[std::size_t(s)] -= node::cellsIn(node::popcount(node::octantMask(w, s)), level - 1);
     releaseValues(at);
+    value_leaves_ -= node::hasValues(w);
     return;
   }
   for (unsigned o = 0; o < 8; ++o) releaseSubtree(node::childOffset(w, o), level - 1);
@@ -197,7 +198,7 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   const std::size_t fresh = n - free_blocks_;
   const std::size_t blocks = words_.size() / 8 + fresh;
   const std::size_t bytes =
-      blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) + values_.size() * sizeof(float);
+      blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) + value_pages_.size() * kValuePageBytes;
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
                            " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");
@@ -259,7 +260,7 @@ void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z,
       const std::size_t first = std::size_t(block) * 8;
       std::fill_n(words_.begin() + first, 8, node::uniform(CellState::Unknown));
       words_[first + octant] = root;
-      if (node::hasValues(root)) value_of_[first + octant] = value_of_[0];
+      if (node::hasValueBlock(root)) value_of_[first + octant] = value_of_[0];
       words_[0] = node::reference(block);
     }
     ++root_level_;
@@ -310,11 +311,10 @@ void FastOctTree::clear() {
   free_blocks_ = 0;
   live_blocks_ = 0;
   counts_ = {0, 0, 0};
-  value_of_.clear();
-  value_of_.shrink_to_fit();
-  std::vector<float>().swap(values_);
-  std::vector<std::uint32_t>().swap(free_values_);
-  value_blocks_ = 0;
+  releaseAllValues();
+  value_leaves_ = 0;
+  palette_.clear();
+  palette_of_.clear();
   ++version_;
 }
 
@@ -346,7 +346,8 @@ namespace {
 bool sameSubtree(const FastOctTree& a, std::size_t at_a, NodeWord wa, const FastOctTree& b, std::size_t at_b,
                  NodeWord wb) {
   if (node::isBitmap(wa) || node::isBitmap(wb)) {
-    if (wa != wb) return false;
+    // Palette indices depend on the order values appeared: compare the values instead.
+    if ((wa & ~node::kPaletteMask) != (wb & ~node::kPaletteMask)) return false;
     if (!node::hasValues(wa)) return true;
     for (unsigned o = 0; o < 8; ++o) {
       const float va = a.leafValue(at_a, o), vb = b.leafValue(at_b, o);

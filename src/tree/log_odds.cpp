@@ -66,8 +66,9 @@ std::uint64_t FastOctTree::getUnsettledCount() const {
 }
 
 void FastOctTree::toMaxLikelihood() {
-  if (value_blocks_ == 0) return;
+  if (value_leaves_ == 0) return;
   settleSubtree(0);
+  value_leaves_ = 0;
   ++version_;
 }
 
@@ -75,7 +76,7 @@ NodeWord FastOctTree::settleSubtree(std::size_t at) {
   NodeWord w = words_[at];
   if (node::isBitmap(w)) {
     releaseValues(at);
-    return words_[at] = w & ~node::kValueFlag;
+    return words_[at] = w & ~(node::kValueFlag | node::kPaletteMask);
   }
   NodeWord folded = node::kBitmapTag;
   bool uniform = true;
@@ -91,23 +92,59 @@ NodeWord FastOctTree::settleSubtree(std::size_t at) {
 
 void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
   const NodeWord w = words_[at];
-  if (node::hasValues(w)) {
-    std::memcpy(v, &values_[8 * std::size_t(value_of_[at])], sizeof v);
+  if (node::hasValueBlock(w)) {
+    std::memcpy(v, valueBlock(value_of_[at]), sizeof v);
     return;
   }
-  for (unsigned o = 0; o < 8; ++o) v[o] = settledValue(node::state(w, o));
+  for (unsigned o = 0; o < 8; ++o) v[o] = leafValue(at, o);
+}
+
+std::uint32_t FastOctTree::paletteIndex(float value) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &value, sizeof bits);
+  const auto found = palette_of_.find(bits);
+  if (found != palette_of_.end()) return found->second;
+  if (palette_.size() > (node::kPaletteMask >> node::kPaletteShift)) return 0;  // full
+  if (palette_.empty()) palette_.push_back(kUnknownValue);                      // index 0: no palette
+  palette_.push_back(value);
+  return palette_of_[bits] = std::uint32_t(palette_.size() - 1);
+}
+
+NodeWord FastOctTree::storeValues(std::size_t at, NodeWord states, const float (&v)[8]) {
+  // One value in every known cell, bit for bit (-0.0 is not 0.0 here).
+  const float* one = nullptr;
+  bool uniform = true;
+  for (const float& x : v)
+    if (!std::isnan(x)) {
+      uniform = uniform && (!one || std::memcmp(&x, one, sizeof x) == 0);
+      one = &x;
+    }
+  const std::uint32_t p = uniform && one ? paletteIndex(*one) : 0;
+  if (p != 0) {
+    releaseValues(at);
+    return states | node::kValueFlag | (p << node::kPaletteShift);
+  }
+  if (!node::hasValueBlock(words_[at])) {
+    reserveValueBlock();
+    value_of_[at] = newValueBlock();
+  }
+  std::memcpy(valueBlock(value_of_[at]), v, sizeof v);
+  return states | node::kValueFlag;
 }
 
 void FastOctTree::installValues(std::vector<float> values) {
-  values_ = std::move(values);
-  value_blocks_ = values_.size() / 8;
-  if (values_.empty()) return;
-  value_of_.assign(words_.size(), 0);
-  std::uint32_t next = 0;
+  releaseAllValues();
+  if (values.empty()) return;
+  std::size_t next = 0;
   auto walk = [&](auto& self, std::size_t at) -> void {
     const NodeWord w = words_[at];
     if (node::isBitmap(w)) {
-      if (node::hasValues(w)) value_of_[at] = next++;
+      if (!node::hasValues(w)) return;
+      float v[8];
+      std::memcpy(v, &values[8 * next++], sizeof v);
+      words_[at] = w & ~node::kValueFlag;  // no values yet
+      words_[at] = storeValues(at, words_[at], v);
+      ++value_leaves_;
       return;
     }
     for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
@@ -117,7 +154,8 @@ void FastOctTree::installValues(std::vector<float> values) {
 
 void FastOctTree::reserveValueBlock() {
   if (!free_values_.empty()) return;
-  const std::size_t bytes = (2 * words_.size() + values_.size() + 8) * sizeof(float);
+  const std::size_t bytes =
+      2 * words_.size() * sizeof(NodeWord) + (value_pages_.size() + 1) * kValuePageBytes;
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool and its values would need " +
                            std::to_string(bytes) + " bytes, beyond the cap of " + std::to_string(max_bytes_) +
@@ -126,18 +164,33 @@ void FastOctTree::reserveValueBlock() {
     value_of_.reserve(words_.capacity());
     value_of_.resize(words_.size());
   }
-  if (values_.size() + 8 > values_.capacity())
-    values_.reserve(std::max(values_.size() + 8, 2 * values_.capacity()));
+}
+
+std::uint32_t FastOctTree::newValueBlock() {
+  ++value_blocks_;
+  if (!free_values_.empty()) {
+    const std::uint32_t b = free_values_.back();
+    free_values_.pop_back();
+    return b;
+  }
+  if ((value_blocks_made_ >> kValuePageBits) == value_pages_.size())
+    value_pages_.emplace_back(std::size_t(8) << kValuePageBits);
+  return value_blocks_made_++;
 }
 
 void FastOctTree::releaseValues(std::size_t at) {
-  if (!node::hasValues(words_[at])) return;
+  if (!node::hasValueBlock(words_[at])) return;
   free_values_.push_back(value_of_[at]);
-  if (--value_blocks_ > 0) return;
   // Every cell settled, as a scan repeated until it clamps leaves them: the map is as small as a binary one.
+  if (--value_blocks_ == 0) releaseAllValues();
+}
+
+void FastOctTree::releaseAllValues() {
   std::vector<std::uint32_t>().swap(value_of_);
-  std::vector<float>().swap(values_);
+  std::vector<std::vector<float>>().swap(value_pages_);
   std::vector<std::uint32_t>().swap(free_values_);
+  value_blocks_made_ = 0;
+  value_blocks_ = 0;
 }
 
 unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
@@ -149,25 +202,12 @@ unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
     w = node::withState(w, o, model_.occupied(v[o]) ? CellState::Occupied : CellState::Free);
     settled = settled && model_.settled(v[o]);
   }
-  if (!settled) {
-    if (!node::hasValues(words_[at])) {
-      reserveValueBlock();
-      std::uint32_t block;
-      if (!free_values_.empty()) {
-        block = free_values_.back();
-        free_values_.pop_back();
-      } else {
-        block = std::uint32_t(values_.size() / 8);
-        values_.resize(values_.size() + 8);
-      }
-      value_of_[at] = block;
-      ++value_blocks_;
-    }
-    float* to = &values_[8 * std::size_t(value_of_[at])];
-    for (unsigned o = 0; o < 8; ++o) to[o] = std::isnan(v[o]) ? kUnknownValue : v[o];
-    w |= node::kValueFlag;
-  } else {
+  if (settled) {
     releaseValues(at);
+  } else {
+    float canonical[8];  // one NaN for every unknown cell
+    for (unsigned o = 0; o < 8; ++o) canonical[o] = std::isnan(v[o]) ? kUnknownValue : v[o];
+    w = storeValues(at, w, canonical);
   }
   return writeLeaf(path, w);
 }

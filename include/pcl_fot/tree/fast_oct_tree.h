@@ -7,6 +7,7 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 #include <pcl_fot/tree/cell_grid.h>
@@ -156,12 +157,16 @@ class FastOctTree {
   std::size_t getBlockCount() const { return live_blocks_; }
   /** Node words in use: the root plus 8 per block. */
   std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
-  /** Leaves whose cells carry values: each takes a block of 8 floats. */
+  /** Leaves whose cells carry different values: each takes a block of 8 floats. A leaf whose known cells
+   * hold one value takes none: its word names the value in a palette of up to 16383 values. */
   std::size_t getValueBlockCount() const { return value_blocks_; }
+  /** Leaves whose cells carry values (a cell between the clamps), by palette or by block. */
+  std::size_t getValueLeafCount() const { return value_leaves_; }
   /** Every byte the tree holds: the object, the pool and the values, free blocks included. */
   std::size_t getMemoryBytes() const {
-    return sizeof(*this) + (words_.capacity() + value_of_.capacity() + values_.capacity()) * 4 +
-           free_values_.capacity() * sizeof(std::uint32_t);
+    return sizeof(*this) + (words_.capacity() + value_of_.capacity() + free_values_.capacity()) * 4 +
+           value_pages_.size() * kValuePageBytes + value_pages_.capacity() * sizeof(value_pages_[0]) +
+           palette_.capacity() * (sizeof(float) + 2 * sizeof(void*));
   }
   /** Root level: the root spans 2^depth cells per axis. */
   unsigned getDepth() const { return root_level_; }
@@ -225,7 +230,10 @@ class FastOctTree {
   /** The log-odds of cell o of the leaf word at pool offset `at` (a level-1 word of the pool). */
   float leafValue(std::size_t at, unsigned o) const {
     const NodeWord w = words_[at];
-    return node::hasValues(w) ? values_[8 * std::size_t(value_of_[at]) + o] : settledValue(node::state(w, o));
+    if (!node::hasValues(w) || node::state(w, o) == CellState::Unknown)
+      return settledValue(node::state(w, o));
+    const std::uint32_t p = node::palette(w);
+    return p ? palette_[p] : valueBlock(value_of_[at])[o];
   }
   /** The log-odds a settled cell of this state holds; NaN for Unknown. */
   float settledValue(CellState s) const {
@@ -276,7 +284,17 @@ class FastOctTree {
   void leafValues(std::size_t at, float (&v)[8]) const;
   /** Makes room for one more value block, or throws MemoryLimitError before anything changes. */
   void reserveValueBlock();
+  /**
+   * Stores unsettled values for the leaf word at `at`: in the palette if its known cells hold one value
+   * and the palette has room, else in a value block. Returns `states` flagged accordingly.
+   */
+  NodeWord storeValues(std::size_t at, NodeWord states, const float (&v)[8]);
+  /** The palette index of a value, added if new; 0 when the palette is full. */
+  std::uint32_t paletteIndex(float value);
+  /** A value block from the free list or the pages; room must have been reserved. */
+  std::uint32_t newValueBlock();
   void releaseValues(std::size_t at);
+  void releaseAllValues();
   /** Gives the flagged leaves, in pre-order, the value blocks of `values` (a canonical pool's). */
   void installValues(std::vector<float> values);
   /** toMaxLikelihood below the word at pool offset `at`; returns the word, folded where it became uniform. */
@@ -312,11 +330,25 @@ class FastOctTree {
   SensorModel model_;
   UpdateRule rule_ = UpdateRule::Binary;
   // Values of flagged leaves: value_of_[offset] is the value block of the leaf word at that pool offset
-  // (sized with the pool once a first block exists), and block b is values_[8b .. 8b+7].
+  // (sized with the pool once a first block exists). Blocks of 8 floats sit in fixed pages, so the values
+  // grow without copying and without a doubled vector's slack.
+  static constexpr unsigned kValuePageBits = 9;
+  static constexpr std::size_t kValuePageBytes = (std::size_t(8) << kValuePageBits) * sizeof(float);
+  float* valueBlock(std::uint32_t b) {
+    return &value_pages_[b >> kValuePageBits][8 * std::size_t(b & ((1u << kValuePageBits) - 1))];
+  }
+  const float* valueBlock(std::uint32_t b) const {
+    return &value_pages_[b >> kValuePageBits][8 * std::size_t(b & ((1u << kValuePageBits) - 1))];
+  }
   std::vector<std::uint32_t> value_of_;
-  std::vector<float> values_;
+  std::vector<std::vector<float>> value_pages_;
+  std::uint32_t value_blocks_made_ = 0;  // blocks handed out of the pages, free ones included
   std::vector<std::uint32_t> free_values_;
   std::size_t value_blocks_ = 0;
+  std::size_t value_leaves_ = 0;
+  // Values of uniform-valued leaves; entry 0 is unused. Only ever grows, up to 16383 values.
+  std::vector<float> palette_;
+  std::unordered_map<std::uint32_t, std::uint32_t> palette_of_;  // a value's bits -> its index
 };
 
 inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
@@ -325,6 +357,7 @@ inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated
     counts_[std::size_t(s)] += node::popcount(node::octantMask(updated, s));
     counts_[std::size_t(s)] -= node::popcount(node::octantMask(leaf, s));
   }
+  value_leaves_ += std::size_t(node::hasValues(updated)) - std::size_t(node::hasValues(leaf));
   leaf = updated;
   return node::isUniform(updated) ? collapseFrom(path, 1) : 1;
 }

@@ -14,8 +14,9 @@ namespace fot {
  * Tag bit 0 set: a bitmap word. Bits 16..31 hold the states of the node's 8 octants, 2 bits each
  * (octant i at bits 16+2i), and bits 2..15 are zero. At level 1 the octants are voxels: the paper's
  * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a level-1 word whose
- * cells carry log-odds between the clamps: the tree keeps their 8 values aside (see FastOctTree). Its
- * states are the values thresholded, so a reader of states needs no values.
+ * cells carry log-odds between the clamps (see FastOctTree): bits 2..15 then hold the index of their one
+ * value in the tree's palette, when all its known cells hold one value, or 0 when the tree keeps their 8
+ * values in a block aside. Its states are the values thresholded, so a reader of states needs no values.
  * Tag bit 0 clear: a reference, the index of the pool block that holds the 8 child words.
  */
 using NodeWord = std::uint32_t;
@@ -25,6 +26,8 @@ namespace node {
 
 constexpr NodeWord kBitmapTag = 1u;
 constexpr NodeWord kValueFlag = 2u;
+constexpr unsigned kPaletteShift = 2;
+constexpr NodeWord kPaletteMask = 0x3FFFu << kPaletteShift;
 constexpr unsigned kStateShift = 16;
 /** Largest block index a reference word can hold. */
 constexpr std::uint32_t kMaxBlocks = 0x7FFFFFFFu;
@@ -68,6 +71,15 @@ constexpr NodeWord withStates(NodeWord w, std::uint32_t mask, CellState s) {
   pairs = (pairs | (pairs << 1)) & 0x5555u;
   const NodeWord field = (pairs * 3u) << kStateShift;
   return (w & ~field) | ((pairs * NodeWord(s)) << kStateShift);
+}
+
+/** A flagged leaf's palette index; 0 when its values are in a block. */
+constexpr std::uint32_t palette(NodeWord w) {
+  return (w & kPaletteMask) >> kPaletteShift;
+}
+/** A flagged leaf whose 8 values are in a block. */
+constexpr bool hasValueBlock(NodeWord w) {
+  return hasValues(w) && (w & kPaletteMask) == 0;
 }
 
 /** Bits set in an octant mask. Without -mpopcnt the builtin is a libgcc call, so count in registers. */
