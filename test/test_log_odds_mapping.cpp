@@ -286,6 +286,11 @@ TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
   tree.setCell(Key{1001, 0, 0}, CellState::Occupied);
   tree.setCell(Key{0, 0, 0}, CellState::Free);
   EXPECT_EQ(tree.getValueLeafCount(), 19999u);
+  const std::size_t held = tree.getMemoryBytes();
+  const FastOctTree before = tree;
+  tree.shrinkToFit();
+  EXPECT_LE(tree.getMemoryBytes(), held);
+  EXPECT_TRUE(tree == before);
   EXPECT_EQ(tree.getLogOdds(Key{0, 0, 0}), SensorModel().clampMinLogOdds());
 }
 

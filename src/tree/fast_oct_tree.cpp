@@ -189,6 +189,12 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
   freeBlock(node::block(w));
 }
 
+void FastOctTree::shrinkToFit() {
+  words_.shrink_to_fit();
+  value_of_.shrink_to_fit();
+  free_values_.shrink_to_fit();
+}
+
 void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {
   max_bytes_ = bytes;
 }

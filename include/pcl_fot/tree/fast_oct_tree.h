@@ -178,6 +178,12 @@ class FastOctTree {
   void setMaxMemoryBytes(std::size_t bytes);
   std::size_t getMaxMemoryBytes() const { return max_bytes_; }
 
+  /**
+   * Gives back the room the pool and the index of values keep for growth (they double as they grow). The
+   * next growth copies them; call it when a map is done, or between batches of scans.
+   */
+  void shrinkToFit();
+
   /** Removes every cell and releases the pool. */
   void clear();
 
