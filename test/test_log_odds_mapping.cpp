@@ -294,6 +294,29 @@ TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
   EXPECT_EQ(tree.getLogOdds(Key{0, 0, 0}), SensorModel().clampMinLogOdds());
 }
 
+TEST(LogOddsStorage, LeavesOfSeveralValuesTakeBytesWhileThePaletteIsShort) {
+  FastOctTree tree(0.1);
+  tree.setLogOdds(Key{0, 0, 0}, 0.5f);
+  tree.setLogOdds(Key{1, 0, 0}, -0.5f);  // two values in one leaf: a block of palette indices
+  EXPECT_EQ(tree.getValueBlockCount(), 1u);
+  for (int i = 0; i < 300; ++i) tree.setLogOdds(Key{4 + 2 * i, 0, 0}, 0.001f * float(i + 1));
+  tree.setLogOdds(Key{0, 1, 0}, 0.299f);  // a value past the palette's first 255: the leaf takes floats
+  tree.setLogOdds(Key{1, 1, 0}, 0.3f);
+  EXPECT_EQ(tree.getValueBlockCount(), 1u) << "the leaf kept one block, of another kind";
+  EXPECT_EQ(tree.getLogOdds(Key{0, 0, 0}), 0.5f);
+  EXPECT_EQ(tree.getLogOdds(Key{1, 0, 0}), -0.5f);
+  EXPECT_EQ(tree.getLogOdds(Key{0, 1, 0}), 0.299f);
+  EXPECT_EQ(tree.getLogOdds(Key{1, 1, 0}), 0.3f);
+  EXPECT_EQ(tree.getLogOdds(Key{4 + 2 * 299, 0, 0}), 0.3f);
+  const std::string bytes = io::encodeFot(tree);
+  EXPECT_TRUE(io::decodeFot(bytes.data(), bytes.size()) == tree);
+  tree.setLogOdds(Key{0, 1, 0}, 0.3f);  // one value again: no block
+  tree.setLogOdds(Key{0, 0, 0}, 0.3f);
+  tree.setLogOdds(Key{1, 0, 0}, 0.3f);
+  EXPECT_EQ(tree.getValueBlockCount(), 0u);
+  EXPECT_EQ(tree.getUnsettledCount(), 304u);
+}
+
 TEST(SensorModel, OctoMapsDefaultsAndFloats) {
   const SensorModel m;
   octomap::OcTree om(0.1);

@@ -143,7 +143,7 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   pool.root_level = root.level;
   pool.root_base = root.corner;
   pool.words.reserve(8 * (1 + live_blocks_));
-  pool.values.reserve(8 * value_blocks_);
+  pool.values.reserve(8 * value_leaves_);
   pool.words[0] = node::isBitmap(root.word) && !node::hasValues(root.word)
                       ? root.word
                       : appendSubtree(*this, offsetOf(root), pool);

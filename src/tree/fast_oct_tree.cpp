@@ -192,7 +192,8 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
 void FastOctTree::shrinkToFit() {
   words_.shrink_to_fit();
   value_of_.shrink_to_fit();
-  free_values_.shrink_to_fit();
+  float_blocks_.shrinkToFit();
+  byte_blocks_.shrinkToFit();
 }
 
 void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {
@@ -203,8 +204,8 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   if (n <= free_blocks_) return;
   const std::size_t fresh = n - free_blocks_;
   const std::size_t blocks = words_.size() / 8 + fresh;
-  const std::size_t bytes =
-      blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) + value_pages_.size() * kValuePageBytes;
+  const std::size_t bytes = blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) +
+                            float_blocks_.bytes() + byte_blocks_.bytes();
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
                            " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");

@@ -92,8 +92,8 @@ NodeWord FastOctTree::settleSubtree(std::size_t at) {
 
 void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
   const NodeWord w = words_[at];
-  if (node::hasValueBlock(w)) {
-    std::memcpy(v, valueBlock(value_of_[at]), sizeof v);
+  if (node::hasValues(w) && node::palette(w) == 0) {
+    std::memcpy(v, float_blocks_.at(value_of_[at]), sizeof v);
     return;
   }
   for (unsigned o = 0; o < 8; ++o) v[o] = leafValue(at, o);
@@ -104,14 +104,14 @@ std::uint32_t FastOctTree::paletteIndex(float value) {
   std::memcpy(&bits, &value, sizeof bits);
   const auto found = palette_of_.find(bits);
   if (found != palette_of_.end()) return found->second;
-  if (palette_.size() > (node::kPaletteMask >> node::kPaletteShift)) return 0;  // full
-  if (palette_.empty()) palette_.push_back(kUnknownValue);                      // index 0: no palette
+  if (palette_.size() >= node::kByteBlock) return 0;        // full: 1 .. kByteBlock - 1 are taken
+  if (palette_.empty()) palette_.push_back(kUnknownValue);  // index 0: no palette
   palette_.push_back(value);
   return palette_of_[bits] = std::uint32_t(palette_.size() - 1);
 }
 
 NodeWord FastOctTree::storeValues(std::size_t at, NodeWord states, const float (&v)[8]) {
-  // One value in every known cell, bit for bit (-0.0 is not 0.0 here).
+  // One value in every known cell, bit for bit (-0.0 is not 0.0 here): the word names it.
   const float* one = nullptr;
   bool uniform = true;
   for (const float& x : v)
@@ -124,12 +124,27 @@ NodeWord FastOctTree::storeValues(std::size_t at, NodeWord states, const float (
     releaseValues(at);
     return states | node::kValueFlag | (p << node::kPaletteShift);
   }
-  if (!node::hasValueBlock(words_[at])) {
-    reserveValueBlock();
-    value_of_[at] = newValueBlock();
+  // Values among the palette's first 255: a byte per cell, its palette index (0 where unknown).
+  std::uint8_t index[8];
+  bool bytes = true;
+  for (unsigned o = 0; o < 8 && bytes; ++o) {
+    const std::uint32_t q = std::isnan(v[o]) ? 0 : paletteIndex(v[o]);
+    bytes = std::isnan(v[o]) || (q != 0 && q <= 0xFF);
+    index[o] = std::uint8_t(q);
   }
-  std::memcpy(valueBlock(value_of_[at]), v, sizeof v);
-  return states | node::kValueFlag;
+  const std::uint32_t kind = bytes ? node::kByteBlock : 0;
+  const NodeWord old = words_[at];
+  if (!node::hasValueBlock(old) || node::palette(old) != kind) {
+    reserveValueBlock();
+    const std::uint32_t block = bytes ? byte_blocks_.allocate() : float_blocks_.allocate();
+    releaseValues(at);  // the old block: the new one keeps the index alive
+    value_of_[at] = block;
+  }
+  if (bytes)
+    std::memcpy(byte_blocks_.at(value_of_[at]), index, sizeof index);
+  else
+    std::memcpy(float_blocks_.at(value_of_[at]), v, sizeof v);
+  return states | node::kValueFlag | (kind << node::kPaletteShift);
 }
 
 void FastOctTree::installValues(std::vector<float> values) {
@@ -153,9 +168,8 @@ void FastOctTree::installValues(std::vector<float> values) {
 }
 
 void FastOctTree::reserveValueBlock() {
-  if (!free_values_.empty()) return;
-  const std::size_t bytes =
-      2 * words_.size() * sizeof(NodeWord) + (value_pages_.size() + 1) * kValuePageBytes;
+  const std::size_t bytes = 2 * words_.size() * sizeof(NodeWord) + float_blocks_.bytes() +
+                            float_blocks_.growth() + byte_blocks_.bytes() + byte_blocks_.growth();
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool and its values would need " +
                            std::to_string(bytes) + " bytes, beyond the cap of " + std::to_string(max_bytes_) +
@@ -166,31 +180,21 @@ void FastOctTree::reserveValueBlock() {
   }
 }
 
-std::uint32_t FastOctTree::newValueBlock() {
-  ++value_blocks_;
-  if (!free_values_.empty()) {
-    const std::uint32_t b = free_values_.back();
-    free_values_.pop_back();
-    return b;
-  }
-  if ((value_blocks_made_ >> kValuePageBits) == value_pages_.size())
-    value_pages_.emplace_back(std::size_t(8) << kValuePageBits);
-  return value_blocks_made_++;
-}
-
 void FastOctTree::releaseValues(std::size_t at) {
-  if (!node::hasValueBlock(words_[at])) return;
-  free_values_.push_back(value_of_[at]);
-  // Every cell settled, as a scan repeated until it clamps leaves them: the map is as small as a binary one.
-  if (--value_blocks_ == 0) releaseAllValues();
+  const NodeWord w = words_[at];
+  if (!node::hasValueBlock(w)) return;
+  if (node::palette(w) == 0)
+    float_blocks_.release(value_of_[at]);
+  else
+    byte_blocks_.release(value_of_[at]);
+  // No block left, as when a scan repeated until it clamps settles every cell: no index either.
+  if (getValueBlockCount() == 0) std::vector<std::uint32_t>().swap(value_of_);
 }
 
 void FastOctTree::releaseAllValues() {
   std::vector<std::uint32_t>().swap(value_of_);
-  std::vector<std::vector<float>>().swap(value_pages_);
-  std::vector<std::uint32_t>().swap(free_values_);
-  value_blocks_made_ = 0;
-  value_blocks_ = 0;
+  float_blocks_.clear();
+  byte_blocks_.clear();
 }
 
 unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {

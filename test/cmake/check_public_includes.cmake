@@ -2,6 +2,7 @@
 # header that is not on the list below of those whose templates or inline hot paths need it.
 set(allowed
   "pcl_fot/tree/tree_coord.h:pcl_fot/detail/bits.h"
+  "pcl_fot/tree/fast_oct_tree.h:pcl_fot/detail/block_pages.h"
   "pcl_fot/dense/fast_occ_mesh.h:pcl_fot/detail/bits.h"
   "pcl_fot/pcl/impl/octree_point_cloud.hpp:pcl_fot/detail/bits.h"
   "pcl_fot/pcl/impl/fast_oct_tree_search.hpp:pcl_fot/detail/cloud_fingerprint.h"

@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include <pcl_fot/detail/block_pages.h>
 #include <pcl_fot/tree/cell_grid.h>
 #include <pcl_fot/tree/key.h>
 #include <pcl_fot/tree/node_view.h>
@@ -157,16 +158,18 @@ class FastOctTree {
   std::size_t getBlockCount() const { return live_blocks_; }
   /** Node words in use: the root plus 8 per block. */
   std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
-  /** Leaves whose cells carry different values: each takes a block of 8 floats. A leaf whose known cells
-   * hold one value takes none: its word names the value in a palette of up to 16383 values. */
-  std::size_t getValueBlockCount() const { return value_blocks_; }
+  /**
+   * Leaves whose cells carry different values, each with a block: of 8 palette indices (8 bytes) when the
+   * palette's first 255 values hold them, else of 8 floats. A leaf whose known cells hold one value takes
+   * none: its word names the value in a palette of up to 16382 values.
+   */
+  std::size_t getValueBlockCount() const { return float_blocks_.live() + byte_blocks_.live(); }
   /** Leaves whose cells carry values (a cell between the clamps), by palette or by block. */
   std::size_t getValueLeafCount() const { return value_leaves_; }
   /** Every byte the tree holds: the object, the pool and the values, free blocks included. */
   std::size_t getMemoryBytes() const {
-    return sizeof(*this) + (words_.capacity() + value_of_.capacity() + free_values_.capacity()) * 4 +
-           value_pages_.size() * kValuePageBytes + value_pages_.capacity() * sizeof(value_pages_[0]) +
-           palette_.capacity() * (sizeof(float) + 2 * sizeof(void*));
+    return sizeof(*this) + (words_.capacity() + value_of_.capacity()) * 4 + float_blocks_.bytes() +
+           byte_blocks_.bytes() + palette_.capacity() * (sizeof(float) + 2 * sizeof(void*));
   }
   /** Root level: the root spans 2^depth cells per axis. */
   unsigned getDepth() const { return root_level_; }
@@ -239,7 +242,8 @@ class FastOctTree {
     if (!node::hasValues(w) || node::state(w, o) == CellState::Unknown)
       return settledValue(node::state(w, o));
     const std::uint32_t p = node::palette(w);
-    return p ? palette_[p] : valueBlock(value_of_[at])[o];
+    if (p == 0) return float_blocks_.at(value_of_[at])[o];
+    return palette_[p == node::kByteBlock ? byte_blocks_.at(value_of_[at])[o] : p];
   }
   /** The log-odds a settled cell of this state holds; NaN for Unknown. */
   float settledValue(CellState s) const {
@@ -297,8 +301,6 @@ class FastOctTree {
   NodeWord storeValues(std::size_t at, NodeWord states, const float (&v)[8]);
   /** The palette index of a value, added if new; 0 when the palette is full. */
   std::uint32_t paletteIndex(float value);
-  /** A value block from the free list or the pages; room must have been reserved. */
-  std::uint32_t newValueBlock();
   void releaseValues(std::size_t at);
   void releaseAllValues();
   /** Gives the flagged leaves, in pre-order, the value blocks of `values` (a canonical pool's). */
@@ -335,24 +337,13 @@ class FastOctTree {
   std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
   SensorModel model_;
   UpdateRule rule_ = UpdateRule::Binary;
-  // Values of flagged leaves: value_of_[offset] is the value block of the leaf word at that pool offset
-  // (sized with the pool once a first block exists). Blocks of 8 floats sit in fixed pages, so the values
-  // grow without copying and without a doubled vector's slack.
-  static constexpr unsigned kValuePageBits = 9;
-  static constexpr std::size_t kValuePageBytes = (std::size_t(8) << kValuePageBits) * sizeof(float);
-  float* valueBlock(std::uint32_t b) {
-    return &value_pages_[b >> kValuePageBits][8 * std::size_t(b & ((1u << kValuePageBits) - 1))];
-  }
-  const float* valueBlock(std::uint32_t b) const {
-    return &value_pages_[b >> kValuePageBits][8 * std::size_t(b & ((1u << kValuePageBits) - 1))];
-  }
+  // Values of flagged leaves with a block: value_of_[offset] is the block of the leaf word at that pool
+  // offset (sized with the pool while a block exists), among the float or the byte blocks by its word.
   std::vector<std::uint32_t> value_of_;
-  std::vector<std::vector<float>> value_pages_;
-  std::uint32_t value_blocks_made_ = 0;  // blocks handed out of the pages, free ones included
-  std::vector<std::uint32_t> free_values_;
-  std::size_t value_blocks_ = 0;
+  detail::BlockPages<float, 8> float_blocks_;
+  detail::BlockPages<std::uint8_t, 8> byte_blocks_;
   std::size_t value_leaves_ = 0;
-  // Values of uniform-valued leaves; entry 0 is unused. Only ever grows, up to 16383 values.
+  // The values leaves name; entry 0 is unused. Only ever grows, up to 16382 values.
   std::vector<float> palette_;
   std::unordered_map<std::uint32_t, std::uint32_t> palette_of_;  // a value's bits -> its index
 };

@@ -15,9 +15,10 @@ namespace fot {
  * (octant i at bits 16+2i), and bits 2..15 are zero. At level 1 the octants are voxels: the paper's
  * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a level-1 word whose
  * cells carry log-odds between the clamps (see FastOctTree): bits 2..15 then hold the index of their one
- * value in the tree's palette, when all its known cells hold one value, or 0 when the tree keeps their 8
- * values in a block aside. Its states are the values thresholded, so a reader of states needs no values.
- * Tag bit 0 clear: a reference, the index of the pool block that holds the 8 child words.
+ * value in the tree's palette, when all its known cells hold one value; kByteBlock when the tree keeps the
+ * 8 cells' palette indices in a block of bytes aside; or 0 when it keeps their 8 floats in a block aside. Its
+ * states are the values thresholded, so a reader of states needs no values. Tag bit 0 clear: a reference, the
+ * index of the pool block that holds the 8 child words.
  */
 using NodeWord = std::uint32_t;
 static_assert(sizeof(NodeWord) == 4, "a FastOctTree node is exactly one 32-bit word");
@@ -28,6 +29,7 @@ constexpr NodeWord kBitmapTag = 1u;
 constexpr NodeWord kValueFlag = 2u;
 constexpr unsigned kPaletteShift = 2;
 constexpr NodeWord kPaletteMask = 0x3FFFu << kPaletteShift;
+constexpr std::uint32_t kByteBlock = 0x3FFFu;
 constexpr unsigned kStateShift = 16;
 /** Largest block index a reference word can hold. */
 constexpr std::uint32_t kMaxBlocks = 0x7FFFFFFFu;
@@ -77,9 +79,9 @@ constexpr NodeWord withStates(NodeWord w, std::uint32_t mask, CellState s) {
 constexpr std::uint32_t palette(NodeWord w) {
   return (w & kPaletteMask) >> kPaletteShift;
 }
-/** A flagged leaf whose 8 values are in a block. */
+/** A flagged leaf whose values are in a block, of floats or of palette indices. */
 constexpr bool hasValueBlock(NodeWord w) {
-  return hasValues(w) && (w & kPaletteMask) == 0;
+  return hasValues(w) && (palette(w) == 0 || palette(w) == kByteBlock);
 }
 
 /** Bits set in an octant mask. Without -mpopcnt the builtin is a libgcc call, so count in registers. */
