@@ -322,6 +322,7 @@ void FastOctTree::clear() {
   value_leaves_ = 0;
   palette_.clear();
   palette_of_.clear();
+  palette_hits_ = {};
   ++version_;
 }
 

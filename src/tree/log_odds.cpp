@@ -92,22 +92,37 @@ NodeWord FastOctTree::settleSubtree(std::size_t at) {
 
 void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
   const NodeWord w = words_[at];
-  if (node::hasValues(w) && node::palette(w) == 0) {
+  const std::uint32_t p = node::palette(w);
+  if (!node::hasValues(w)) {
+    for (unsigned o = 0; o < 8; ++o) v[o] = settledValue(node::state(w, o));
+  } else if (p == 0) {
     std::memcpy(v, float_blocks_.at(value_of_[at]), sizeof v);
-    return;
+  } else if (p == node::kByteBlock) {
+    const std::uint8_t* index = byte_blocks_.at(value_of_[at]);
+    for (unsigned o = 0; o < 8; ++o) v[o] = palette_[index[o]];  // entry 0, unknown, is NaN
+  } else {
+    const std::uint32_t known = ~node::octantMask(w, CellState::Unknown);
+    for (unsigned o = 0; o < 8; ++o) v[o] = (known >> o) & 1u ? palette_[p] : kUnknownValue;
   }
-  for (unsigned o = 0; o < 8; ++o) v[o] = leafValue(at, o);
 }
 
 std::uint32_t FastOctTree::paletteIndex(float value) {
   std::uint32_t bits;
   std::memcpy(&bits, &value, sizeof bits);
+  // A map's leaves share a few values: a small table answers before the hash map.
+  PaletteHit& hit = palette_hits_[(bits * 0x9E3779B1u) >> (32 - kPaletteHitBits)];
+  if (hit.index != 0 && hit.bits == bits) return hit.index;
   const auto found = palette_of_.find(bits);
-  if (found != palette_of_.end()) return found->second;
-  if (palette_.size() >= node::kByteBlock) return 0;        // full: 1 .. kByteBlock - 1 are taken
-  if (palette_.empty()) palette_.push_back(kUnknownValue);  // index 0: no palette
-  palette_.push_back(value);
-  return palette_of_[bits] = std::uint32_t(palette_.size() - 1);
+  std::uint32_t index = 0;
+  if (found != palette_of_.end()) {
+    index = found->second;
+  } else if (palette_.size() < node::kByteBlock) {            // room: 1 .. kByteBlock - 1
+    if (palette_.empty()) palette_.push_back(kUnknownValue);  // index 0: no palette
+    palette_.push_back(value);
+    index = palette_of_[bits] = std::uint32_t(palette_.size() - 1);
+  }
+  hit = PaletteHit{bits, index};
+  return index;
 }
 
 NodeWord FastOctTree::storeValues(std::size_t at, NodeWord states, const float (&v)[8]) {

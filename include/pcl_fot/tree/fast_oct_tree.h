@@ -346,6 +346,11 @@ class FastOctTree {
   // The values leaves name; entry 0 is unused. Only ever grows, up to 16382 values.
   std::vector<float> palette_;
   std::unordered_map<std::uint32_t, std::uint32_t> palette_of_;  // a value's bits -> its index
+  struct PaletteHit {
+    std::uint32_t bits = 0, index = 0;  // index 0: empty
+  };
+  static constexpr unsigned kPaletteHitBits = 6;
+  std::array<PaletteHit, std::size_t(1) << kPaletteHitBits> palette_hits_{};
 };
 
 inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
