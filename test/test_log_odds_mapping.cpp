@@ -41,25 +41,27 @@ Scan placed(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Affine3f& 
   return s;
 }
 
-octomap::OcTree octomapOf(const Sequence& scans, double res, bool discretize) {
+octomap::OcTree octomapOf(const Sequence& scans, double res, bool discretize, double max_range = -1.0) {
   octomap::OcTree tree(res);
   for (const Scan& s : scans) {
     octomap::Pointcloud cloud;
     for (std::size_t i = 0; i < s.xyz.size(); i += 3)
       if (std::isfinite(s.xyz[i]) && std::isfinite(s.xyz[i + 1]) && std::isfinite(s.xyz[i + 2]))
         cloud.push_back(s.xyz[i], s.xyz[i + 1], s.xyz[i + 2]);
-    tree.insertPointCloud(cloud, octomap::point3d(s.sensor[0], s.sensor[1], s.sensor[2]), -1.0, false,
+    tree.insertPointCloud(cloud, octomap::point3d(s.sensor[0], s.sensor[1], s.sensor[2]), max_range, false,
                           discretize);
   }
   return tree;
 }
 
-FastOctTree oursOf(const Sequence& scans, double res, bool line_burst, bool discretize) {
+FastOctTree oursOf(const Sequence& scans, double res, bool line_burst, bool discretize,
+                   double max_range = -1.0) {
   FastOctTree tree(res);
   tree.setUpdateRule(UpdateRule::LogOdds);
   ScanOptions options;
   options.line_burst = line_burst;
   options.discretize = discretize;
+  options.max_range = max_range;
   for (const Scan& s : scans) insertRays(tree, s.sensor, s.xyz.data(), s.xyz.size() / 3, 12, options);
   return tree;
 }
@@ -131,6 +133,11 @@ Sequence movingObject() {
 
 TEST(LogOddsMapping, RoomPairAtTheNdtTutorialsGuessEqualsOctoMap) {
   expectSameAsOctoMap(roomPair(), 0.05);
+}
+
+TEST(LogOddsMapping, RoomPairWithAMaximumRangeEqualsOctoMap) {
+  const Sequence scans = roomPair();
+  expectSameLogOdds(octomapOf(scans, 0.1, false, 3.0), oursOf(scans, 0.1, true, false, 3.0));
 }
 
 TEST(LogOddsMapping, ThreeKinectFramesEqualOctoMap) {
