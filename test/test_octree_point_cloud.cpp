@@ -523,3 +523,35 @@ TEST(OctreePointCloud, APointOnTheBoxsFarFaceIsInItsLastVoxel) {
   ours.deleteVoxelAtPoint(p);
   EXPECT_EQ(ours.getLeafCount(), 0u);
 }
+
+TEST(OctreePointCloudIterators, CompareAsPclsDo) {
+  Cloud::Ptr cloud(new Cloud), other(new Cloud);
+  for (int i = 0; i < 50; ++i) {
+    cloud->push_back(PointXYZ(0.1f * float(i % 7), 0.13f * float(i % 5), 0.07f * float(i)));
+    other->push_back(PointXYZ(0.2f * float(i % 3), 0.1f * float(i), 0.05f));
+  }
+  Reference ref_a(0.1), ref_b(0.1);
+  Ours a(0.1), b(0.1);
+  ref_a.setInputCloud(cloud), ref_b.setInputCloud(other), a.setInputCloud(cloud), b.setInputCloud(other);
+  ref_a.addPointsFromInputCloud(), ref_b.addPointsFromInputCloud(), a.addPointsFromInputCloud();
+  b.addPointsFromInputCloud();
+  // The same answers as pcl::octree, and the ones the issue names: true, true, false.
+  EXPECT_EQ(a.begin() == a.begin(), ref_a.begin() == ref_a.begin());
+  EXPECT_TRUE(a.begin() == a.begin());
+  EXPECT_EQ(a.leaf_depth_begin() == a.leaf_depth_begin(),
+            ref_a.leaf_depth_begin() == ref_a.leaf_depth_begin());
+  EXPECT_TRUE(a.leaf_depth_begin() == a.leaf_depth_begin());
+  EXPECT_EQ(a.end() == b.end(), ref_a.end() == ref_b.end());
+  EXPECT_FALSE(a.end() == b.end());
+  EXPECT_EQ(a.begin() == b.begin(), ref_a.begin() == ref_b.begin());
+  EXPECT_EQ(a.begin() == a.end(), ref_a.begin() == ref_a.end());
+  EXPECT_EQ(a.begin(2) == a.begin(), ref_a.begin(2) == ref_a.begin()) << "another maximum depth";
+  // Walked in step, the iterators agree at every node and reach the end together.
+  auto it = a.begin(), jt = a.begin();
+  auto rt = ref_a.begin(), st = ref_a.begin();
+  ++jt, ++st;
+  EXPECT_EQ(it == jt, rt == st);
+  for (; rt != ref_a.end(); ++rt, ++it) ASSERT_TRUE(it != a.end());
+  EXPECT_TRUE(it == a.end());
+  EXPECT_TRUE(it == it);
+}

@@ -72,9 +72,14 @@ class OctreePointCloud {
       ++at_;
       return before;
     }
-    /** Iterators at their end are equal, whichever call made them. */
+    /**
+     * As PCL's: iterators of one octree are equal when both are at their end, or when they share their
+     * maximum depth and stand on nodes of the same key. Iterators of two octrees are never equal.
+     */
     bool operator==(const NodeIterator& o) const {
-      return (atEnd() && o.atEnd()) || (nodes_ == o.nodes_ && at_ == o.at_);
+      if (tree_ != o.tree_) return false;
+      if (atEnd() || o.atEnd()) return atEnd() && o.atEnd();
+      return max_depth_ == o.max_depth_ && node().key == o.node().key;
     }
     bool operator!=(const NodeIterator& o) const { return !(*this == o); }
     /** As in PCL, a branch's key holds only the bits of its depth. */
@@ -87,9 +92,13 @@ class OctreePointCloud {
 
    private:
     friend class OctreePointCloud;
-    explicit NodeIterator(std::shared_ptr<const std::vector<Node>> nodes) : nodes_(std::move(nodes)) {}
+    NodeIterator(const OctreePointCloud* tree, uindex_t max_depth,
+                 std::shared_ptr<const std::vector<Node>> nodes)
+        : tree_(tree), max_depth_(max_depth), nodes_(std::move(nodes)) {}
     bool atEnd() const { return !nodes_ || at_ >= nodes_->size(); }
     const Node& node() const { return (*nodes_)[at_]; }
+    const OctreePointCloud* tree_ = nullptr;
+    uindex_t max_depth_ = 0;
     std::shared_ptr<const std::vector<Node>> nodes_;
     std::size_t at_ = 0;
   };
@@ -176,7 +185,7 @@ class OctreePointCloud {
 
   /** Depth-first, children in index order; max_depth_arg 0 means the full depth. */
   NodeIterator begin(uindex_t max_depth_arg = 0u) const;
-  NodeIterator end() const { return NodeIterator(); }
+  NodeIterator end() const { return NodeIterator(this, 0, nullptr); }
   NodeIterator cbegin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
   NodeIterator cend() const { return end(); }
   NodeIterator depth_begin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
@@ -231,6 +240,8 @@ class OctreePointCloud {
   /** The nodes pcl::octree would hold for these voxels, in its depth-first order, down to max_depth (0: all).
    */
   std::vector<Node> depthFirstNodes(uindex_t max_depth) const;
+  /** An iterator's maximum depth, as PCL's keeps it: the tree's depth for 0. */
+  uindex_t iteratorDepth(uindex_t max_depth) const { return max_depth == 0 ? depth_ : max_depth; }
 
   PointCloudConstPtr input_;
   IndicesConstPtr indices_;

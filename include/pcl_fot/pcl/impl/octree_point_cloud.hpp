@@ -511,7 +511,8 @@ void OctreePointCloud<PointT>::getVoxelBounds(const NodeIterator& iterator, Eige
 template <typename PointT>
 typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::begin(
     uindex_t max_depth_arg) const {
-  return NodeIterator(std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
+  return NodeIterator(this, iteratorDepth(max_depth_arg),
+                      std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
 }
 
 template <typename PointT>
@@ -521,7 +522,8 @@ typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::breadt
   // Depth-first order restricted to one depth is that depth's breadth-first order.
   std::stable_sort(nodes.begin(), nodes.end(),
                    [](const Node& a, const Node& b) { return a.depth < b.depth; });
-  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+  return NodeIterator(this, iteratorDepth(max_depth_arg),
+                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
 template <typename PointT>
@@ -537,7 +539,8 @@ typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::fixed_
   nodes.erase(
       std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth != fixed_depth_arg; }),
       nodes.end());
-  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+  return NodeIterator(this, iteratorDepth(fixed_depth_arg),
+                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
 template <typename PointT>
@@ -547,7 +550,8 @@ typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::leaf_d
   std::vector<Node> nodes;
   nodes.reserve(getLeafCount());
   for (const auto& key : sortedLeafKeys()) nodes.push_back({key, depth_, 0, true});
-  return NodeIterator(std::make_shared<const std::vector<Node>>(std::move(nodes)));
+  return NodeIterator(this, iteratorDepth(max_depth_arg),
+                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
 template <typename PointT>
