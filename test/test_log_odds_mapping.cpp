@@ -14,6 +14,8 @@
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap.h>
 #include <pcl_fot/mapping/scan_insertion.h>
+#include <pcl_fot/psi/psi.h>
+#include <pcl_fot/search/nearest_cell_search.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "scan_data.h"
@@ -322,6 +324,32 @@ TEST(LogOddsStorage, LeavesOfSeveralValuesTakeBytesWhileThePaletteIsShort) {
   tree.setLogOdds(Key{1, 0, 0}, 0.3f);
   EXPECT_EQ(tree.getValueBlockCount(), 0u);
   EXPECT_EQ(tree.getUnsettledCount(), 304u);
+}
+
+TEST(LogOddsMapping, SearchPsiAndExportsReadTheThresholdedMap) {
+  const FastOctTree ours = oursOf(movingObject(), 0.05, true, false);
+  ASSERT_GT(ours.getValueLeafCount(), 0u);
+  FastOctTree settled = ours;
+  settled.toMaxLikelihood();
+  for (CellState target : {CellState::Occupied, CellState::Free}) {
+    std::vector<Key> a, b;
+    ours.forEachCell(target, [&](const Key& k) { a.push_back(k); });
+    settled.forEachCell(target, [&](const Key& k) { b.push_back(k); });
+    EXPECT_EQ(a, b);
+    for (Metric metric : {Metric::Manhattan, Metric::Euclidean}) {
+      NearestCellSearch in_ours(ours, metric, target), in_settled(settled, metric, target);
+      for (int i = 0; i < 200; ++i) {
+        const Key q{(i * 37) % 90 - 5, (i * 53) % 120 - 60, (i * 29) % 60 - 10};
+        CellMatch m, n;
+        ASSERT_EQ(in_ours.nearest(q, m), in_settled.nearest(q, n));
+        EXPECT_EQ(m.key, n.key);
+        EXPECT_EQ(m.distance, n.distance);
+      }
+    }
+  }
+  const FastOctTree other = oursOf({movingObject()[0]}, 0.05, true, false);
+  EXPECT_EQ(psi(ours, other).sum, psi(settled, other).sum);
+  EXPECT_EQ(psi(other, ours).sum, psi(other, settled).sum);
 }
 
 TEST(SensorModel, OctoMapsDefaultsAndFloats) {
