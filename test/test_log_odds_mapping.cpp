@@ -384,3 +384,30 @@ TEST(SensorModel, ValuesThatMakeNoSenseAreRefusedAndNothingChanges) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(LogOddsStorage, AnUpdatePastTheMemoryCapChangesNothing) {
+  int refused = 0;
+  // Around the room a value page takes, so that some caps refuse the expansion and some the page.
+  for (std::size_t cap = 20000; cap <= 21500; cap += 8) {
+    FastOctTree tree(0.1);
+    tree.setBox(Key{0, 0, 0}, Key{1023, 1023, 1023}, CellState::Free);  // settled: one word
+    tree.setCell(Key{100, 0, 0}, CellState::Occupied);
+    tree.setMaxMemoryBytes(cap);
+    const FastOctTree before = tree;
+    try {
+      tree.updateLogOdds(Key{5, 6, 7}, SensorModel().hitLogOdds());  // expands the cube down to a leaf
+      tree.updateLogOdds(Key{9, 6, 7}, 0.25f);
+    } catch (const MemoryLimitError&) {
+      ++refused;
+      EXPECT_TRUE(tree == before || tree.getLogOdds(Key{5, 6, 7}) != before.getLogOdds(Key{5, 6, 7}));
+    }
+    // Whatever happened, the tree is canonical: its pool passes the loader's checks.
+    const std::string bytes = io::encodeFot(tree);
+    EXPECT_NO_THROW(io::decodeFot(bytes.data(), bytes.size())) << "cap " << cap;
+  }
+  EXPECT_GT(refused, 10);
+}
+
+}  // namespace

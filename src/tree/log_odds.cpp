@@ -182,8 +182,8 @@ void FastOctTree::installValues(std::vector<float> values) {
   walk(walk, 0);
 }
 
-void FastOctTree::reserveValueBlock() {
-  const std::size_t bytes = 2 * words_.size() * sizeof(NodeWord) + float_blocks_.bytes() +
+void FastOctTree::reserveValueBlock(std::size_t extra_words) {
+  const std::size_t bytes = 2 * (words_.size() + extra_words) * sizeof(NodeWord) + float_blocks_.bytes() +
                             float_blocks_.growth() + byte_blocks_.bytes() + byte_blocks_.growth();
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool and its values would need " +

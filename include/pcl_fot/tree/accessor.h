@@ -183,10 +183,12 @@ class BasicAccessor {
     return tree_->words()[path_[bottom_]];
   }
 
-  /** Expands the uniform word at the end of the path down to the leaf of (x, y, z), with room for its values.
+  /**
+   * Expands the uniform word at the end of the path down to the leaf of (x, y, z), with room for its values
+   * in the grown pool: past the cap, nothing changes.
    */
   void expand(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    tree_->reserveValueBlock();
+    tree_->reserveValueBlock(8 * (bottom_ - 1));
     tree_->expandTo(path_, bottom_, x, y, z);
     bottom_ = 1;
   }

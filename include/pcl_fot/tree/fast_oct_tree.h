@@ -292,8 +292,11 @@ class FastOctTree {
   /** Writes a leaf's 8 values (NaN: unknown) as its word and, if a cell is unsettled, its value block. */
   unsigned commitLeaf(const std::size_t* path, const float (&v)[8]);
   void leafValues(std::size_t at, float (&v)[8]) const;
-  /** Makes room for one more value block, or throws MemoryLimitError before anything changes. */
-  void reserveValueBlock();
+  /**
+   * Makes room for one more value block once the pool has grown by `extra_words` (an expansion about to
+   * happen), or throws MemoryLimitError before anything changes.
+   */
+  void reserveValueBlock(std::size_t extra_words = 0);
   /**
    * Stores unsettled values for the leaf word at `at`: in the palette if its known cells hold one value
    * and the palette has room, else in a value block. Returns `states` flagged accordingly.

@@ -25,8 +25,10 @@ class SensorModel {
    * Throws std::invalid_argument unless every probability lies in (0, 1), a hit raises the log-odds and a
    * miss lowers it (hit above 0.5, miss below), and clamp_min < occupancy <= clamp_max as log-odds.
    */
-  explicit SensorModel(double prob_hit = 0.7, double prob_miss = 0.4, double clamp_min = 0.1192,
+  explicit SensorModel(double prob_hit, double prob_miss = 0.4, double clamp_min = 0.1192,
                        double clamp_max = 0.971, double occupancy = 0.5);
+  /** OctoMap's defaults. Not explicit, so that options holding a model can be written `= {}`. */
+  SensorModel() : SensorModel(0.7) {}
 
   double probHit() const { return prob_hit_; }
   double probMiss() const { return prob_miss_; }
