@@ -49,7 +49,7 @@ void FastOctTree::setLogOdds(const Key& key, float log_odds) {
 
 std::uint64_t FastOctTree::getUnsettledCount() const {
   std::uint64_t n = 0;
-  auto walk = [&](auto& self, std::size_t at, unsigned level) -> void {
+  auto walk = [&](auto& self, std::size_t at) -> void {
     const NodeWord w = words_[at];
     if (node::isBitmap(w)) {
       if (!node::hasValues(w)) return;
@@ -59,9 +59,9 @@ std::uint64_t FastOctTree::getUnsettledCount() const {
       }
       return;
     }
-    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o), level - 1);
+    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
   };
-  walk(walk, 0, root_level_);
+  walk(walk, 0);
   return n;
 }
 
@@ -237,9 +237,7 @@ unsigned FastOctTree::updateLeaf(const std::size_t* path, std::uint32_t mask, co
   bool changed = false;
   for (std::uint32_t m = mask; m != 0; m &= m - 1) {
     const unsigned o = unsigned(__builtin_ctz(m));
-    if (!std::isnan(v[o]) && model_.pinned(v[o], update[o])) continue;
-    v[o] = model_.update(std::isnan(v[o]) ? 0.0f : v[o], update[o]);
-    changed = true;
+    changed |= model_.updateNode(v[o], update[o]);
   }
   return changed ? commitLeaf(path, v) : 1;
 }
@@ -279,10 +277,8 @@ void FastOctTree::updateCube(const TreeCoord& c, unsigned level, float update) {
     is_uniform = (apart >> level) != 0;  // disjoint from the root (unknown), or holding it (split)
   }
   if (is_uniform) {
-    const float before = settledValue(uniform);
-    const float after = std::isnan(before)
-                            ? model_.update(0.0f, update)
-                            : (model_.pinned(before, update) ? before : model_.update(before, update));
+    float after = settledValue(uniform);
+    model_.updateNode(after, update);
     if (model_.settled(after)) {
       setCube(c, level, model_.occupied(after) ? CellState::Occupied : CellState::Free);
       return;
@@ -310,8 +306,7 @@ void FastOctTree::merge(const FastOctTree& other) {
     if (n.level == 1 && node::isBitmap(n.word)) {  // a leaf: its cells one by one
       Accessor accessor(*this, true);
       for (unsigned o = 0; o < 8; ++o) {
-        const float v =
-            node::hasValues(n.word) ? other.leafValue(at, o) : other.settledValue(node::state(n.word, o));
+        const float v = other.leafValue(at, o);
         if (!std::isnan(v)) accessor.updateCell(n.corner.child(o, 0).key(), v);
       }
       return;

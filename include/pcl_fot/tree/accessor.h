@@ -1,6 +1,5 @@
 #pragma once
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -97,9 +96,7 @@ class BasicAccessor {
   float getLogOdds(const Key& key) {
     const TreeCoord c(key);
     if (!locate(c[0], c[1], c[2])) return FastOctTree::kUnknownValue;
-    const std::size_t at = path_[bottom_];
-    const unsigned o = c.octant(bottom_);
-    return bottom_ == 1 ? tree_->leafValue(at, o) : tree_->settledValue(node::state(tree_->words()[at], o));
+    return tree_->leafValue(path_[bottom_], c.octant(bottom_));
   }
 
   /**
@@ -137,8 +134,8 @@ class BasicAccessor {
     const TreeCoord c(key);
     const NodeWord w = reach(c[0], c[1], c[2]);
     if (bottom_ > 1) {
-      const float v = tree_->settledValue(node::state(w, c.octant(bottom_)));
-      if (!std::isnan(v) && tree_->getSensorModel().pinned(v, update)) return;
+      float v = tree_->settledValue(node::state(w, c.octant(bottom_)));
+      if (!tree_->getSensorModel().updateNode(v, update)) return;  // a settled cube the update cannot move
       expand(c[0], c[1], c[2]);
     }
     const float update8[8] = {update, update, update, update, update, update, update, update};

@@ -236,7 +236,10 @@ class FastOctTree {
   /** The pool offset of the word of a node below references only, such as contentRoot(): found from the root
    * down the node's corner. */
   std::size_t offsetOf(const NodeView& n) const;
-  /** The log-odds of cell o of the leaf word at pool offset `at` (a level-1 word of the pool). */
+  /**
+   * The log-odds of octant o of the bitmap word at pool offset `at`: a cell's for a leaf, a whole settled
+   * octant's above.
+   */
   float leafValue(std::size_t at, unsigned o) const {
     const NodeWord w = words_[at];
     if (!node::hasValues(w) || node::state(w, o) == CellState::Unknown)

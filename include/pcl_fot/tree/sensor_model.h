@@ -52,6 +52,16 @@ class SensorModel {
   bool pinned(float value, float update) const {
     return (update >= 0.0f && value >= max_) || (update <= 0.0f && value <= min_);
   }
+  /**
+   * OctoMap's updateNode on one cell: the value (NaN for an unknown cell, which starts at 0) plus the
+   * update, clamped. Returns false, and leaves the value, when it has reached the clamp the update heads for.
+   */
+  bool updateNode(float& value, float update) const {
+    const bool known = value == value;
+    if (known && pinned(value, update)) return false;
+    value = this->update(known ? value : 0.0f, update);
+    return true;
+  }
   bool occupied(float log_odds) const { return log_odds >= thres_; }
   bool settled(float log_odds) const { return log_odds == min_ || log_odds == max_; }
 
