@@ -26,15 +26,26 @@ struct Hit {
   }
 };
 
+constexpr float kOrigin[3] = {0.0f, 0.0f, 0.0f};
+
 bool finite3(const float* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-/** PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float. */
+/**
+ * PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float; pcl::octree's
+ * Eigen squaredNorm() sums x² + (y² + z²).
+ */
 inline float pointDistance(Metric metric, const float* p, const float q[3]) {
   const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-  return metric == Metric::Euclidean ? dx * dx + dy * dy + dz * dz
-                                     : std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
+  switch (metric) {
+    case Metric::Euclidean:
+      return dx * dx + dy * dy + dz * dz;
+    case Metric::EuclideanEigen:
+      return dx * dx + (dy * dy + dz * dz);
+    default:
+      return std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
+  }
 }
 
 /** The Morton number of a cell inside an aligned cube of 2^level cells, in the tree's octant order. */
@@ -83,7 +94,7 @@ class PointIndex::Policy {
         bound_(limit),
         results_(results) {
     const double res = index.tree_.getGrid().resolution();
-    scale_ = metric == Metric::Euclidean ? res * res : res;
+    scale_ = metric != Metric::Manhattan ? res * res : res;
     const double slack =
         0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / res;
     for (int a = 0; a < 3; ++a) low_[a] = qc[a] - slack, high_[a] = qc[a] + slack;
@@ -99,8 +110,8 @@ class PointIndex::Policy {
       const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
       const double below = std::max({low - high_[a], low_[a] - mid, 0.0}),
                    above = std::max({mid - high_[a], low_[a] - high, 0.0});
-      gap[a][0] = shade((metric_ == Metric::Euclidean ? below * below : below) * scale_);
-      gap[a][1] = shade((metric_ == Metric::Euclidean ? above * above : above) * scale_);
+      gap[a][0] = shade((metric_ != Metric::Manhattan ? below * below : below) * scale_);
+      gap[a][1] = shade((metric_ != Metric::Manhattan ? above * above : above) * scale_);
     }
   }
 
@@ -112,7 +123,7 @@ class PointIndex::Policy {
       nearest = std::min({nearest, low_[a] - box_lo, box_lo + side - high_[a]});
     }
     nearest = std::max(nearest, 0.0);
-    return shade((metric_ == Metric::Euclidean ? nearest * nearest : nearest) * scale_);
+    return shade((metric_ != Metric::Manhattan ? nearest * nearest : nearest) * scale_);
   }
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
@@ -129,6 +140,8 @@ class PointIndex::Policy {
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
     if (metric_ == Metric::Euclidean)
       scanRun<Metric::Euclidean>(rank, begin, end);
+    else if (metric_ == Metric::EuclideanEigen)
+      scanRun<Metric::EuclideanEigen>(rank, begin, end);
     else
       scanRun<Metric::Manhattan>(rank, begin, end);
   }
@@ -212,8 +225,8 @@ class PointIndex::Policy {
   float boxDistance(const CrowdNode& box) const {
     float gap[3];
     for (int a = 0; a < 3; ++a) gap[a] = std::max({box.lo[a] - q_[a], q_[a] - box.hi[a], 0.0f});
-    return M == Metric::Euclidean ? gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]
-                                  : gap[0] + gap[1] + gap[2];
+    if (M == Metric::Manhattan) return gap[0] + gap[1] + gap[2];
+    return pointDistance(M, gap, kOrigin);
   }
 
   /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
@@ -563,7 +576,7 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
     distances.clear();
     return 0;
   }
-  const double limit = metric == Metric::Euclidean ? radius * radius : radius;
+  const double limit = metric != Metric::Manhattan ? radius * radius : radius;
   return search(q, max_results ? max_results : Policy::kAll, limit, metric, indices, distances);
 }
 

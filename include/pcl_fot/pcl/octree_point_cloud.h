@@ -3,6 +3,8 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 #include <pcl/memory.h>
@@ -13,30 +15,36 @@
 #include <pcl/types.h>
 #include <Eigen/Core>
 
+#include <pcl_fot/pcl/octree_containers.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace pcl {
 namespace fot {
 
 /**
- * A FastOctTree with the interface of pcl::octree::OctreePointCloud and OctreePointCloudOccupancy: code
- * written for them compiles after changing the type name, and gets the same answers.
+ * A FastOctTree with the interface of pcl::octree::OctreePointCloud: code written for it compiles after
+ * changing the namespace, and gets the same answers.
  *
  * The bounding box follows PCL exactly: undefined until the first point, which it surrounds with ±res/2;
  * growing by doubling towards points outside it; or set with defineBoundingBox() and padded to a cube of
- * 2^depth cells. Keys, voxel centres and bounds are computed with PCL's arithmetic. The cells themselves
+ * 2^depth cells. Keys, voxel centres and bounds are computed with PCL's arithmetic. The occupied cells
  * live in a FastOctTree at fixed keys, shifted as the box grows.
  *
- * Differences from pcl::octree, listed in doc/user_guide.md: leaves hold occupancy, not point indices (as
- * OctreePointCloudOccupancy); there is no serializeTree (see the .fot file format), no dynamic depth, and
- * iterators yield keys and depths, not node pointers; points that are not finite, or that would grow the box
- * beyond ±2^29 cells, are refused with PCL_ERROR rather than asserting.
+ * Leaves hold LeafContainerT, pcl::octree's own container types (point indices by default), in a table
+ * beside the tree keyed by each leaf's cube; with OctreeContainerEmpty there is no table and the tree alone
+ * answers (OctreePointCloudOccupancy). Branches hold nothing: BranchContainerT is accepted for PCL's
+ * signature only. Under enableDynamicDepth, leaves stay as shallow as PCL keeps them.
+ *
+ * Differences from pcl::octree, listed in doc/user_guide.md: there is no serializeTree (see the .fot file
+ * format); an iterator lists the nodes when made and does not see later changes; points that are not
+ * finite, or that would grow the box beyond ±2^29 cells, are refused with PCL_ERROR rather than asserting.
  */
-template <typename PointT>
+template <typename PointT, typename LeafContainerT = OctreeContainerPointIndices,
+          typename BranchContainerT = OctreeContainerEmpty>
 class OctreePointCloud {
  public:
-  using Ptr = shared_ptr<OctreePointCloud<PointT>>;
-  using ConstPtr = shared_ptr<const OctreePointCloud<PointT>>;
+  using Ptr = shared_ptr<OctreePointCloud<PointT, LeafContainerT, BranchContainerT>>;
+  using ConstPtr = shared_ptr<const OctreePointCloud<PointT, LeafContainerT, BranchContainerT>>;
   using PointCloud = pcl::PointCloud<PointT>;
   using PointCloudPtr = typename PointCloud::Ptr;
   using PointCloudConstPtr = typename PointCloud::ConstPtr;
@@ -44,9 +52,16 @@ class OctreePointCloud {
   using IndicesConstPtr = shared_ptr<const Indices>;
   using AlignedPointTVector = std::vector<PointT, Eigen::aligned_allocator<PointT>>;
   using AlignedPointXYZVector = std::vector<PointXYZ, Eigen::aligned_allocator<PointXYZ>>;
-  using SingleBuffer = OctreePointCloud<PointT>;
+  using SingleBuffer = OctreePointCloud<PointT, LeafContainerT, BranchContainerT>;
+  using LeafContainer = LeafContainerT;
+  using BranchContainer = BranchContainerT;
+  using LeafNode = octree::OctreeLeafNode<LeafContainerT>;
+  using BranchNode = octree::OctreeBranchNode<BranchContainerT>;
 
  private:
+  /** Whether leaves hold containers; the occupancy octree's leaves are the tree's cells. */
+  static constexpr bool kHoldsLeaves = !std::is_same<LeafContainerT, OctreeContainerEmpty>::value;
+
   /** One node of the octree pcl::octree would build. */
   struct Node {
     octree::OctreeKey key;
@@ -89,6 +104,15 @@ class OctreePointCloud {
     bool isBranchNode() const { return !node().leaf; }
     /** PCL's bit pattern of a branch's children (bit i: child i exists); 0 for a leaf. */
     char getNodeConfiguration() const { return static_cast<char>(node().children); }
+    /**
+     * The leaf's node from the octree's table; for a branch, one node of type BRANCH_NODE that all
+     * branches share (branches hold nothing here).
+     */
+    OctreeNode* getCurrentOctreeNode() const;
+    /** The leaf's container; only on a leaf of an octree that holds containers. */
+    LeafContainerT& getLeafContainer() const {
+      return tree_->leafAt(node().key, node().depth)->getContainer();
+    }
 
    private:
     friend class OctreePointCloud;
@@ -119,6 +143,7 @@ class OctreePointCloud {
 
   /** Throws std::invalid_argument for a resolution CellGrid refuses (PCL asserts). */
   OctreePointCloud(const double resolution_arg);
+  virtual ~OctreePointCloud() = default;
 
   void setInputCloud(const PointCloudConstPtr& cloud_arg,
                      const IndicesConstPtr& indices_arg = IndicesConstPtr());
@@ -131,13 +156,14 @@ class OctreePointCloud {
   double getResolution() const { return resolution_; }
   uindex_t getTreeDepth() const { return depth_; }
 
-  /** Adds every finite point of the input cloud (or of its indices). */
+  /** Adds every finite point of the input cloud (or of its indices) to its leaf, in index order. */
   void addPointsFromInputCloud();
-  /** Appends the point to the input cloud (which must be cloud_arg) and adds it. */
   /** Adds the input cloud's point point_idx_arg and appends the index to indices_arg, if given. */
   void addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg);
+  /** Appends the point to the input cloud (which must be cloud_arg) and adds it. */
   void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg);
   void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg, IndicesPtr indices_arg);
+  /** Creates the point's leaf, holding no point (OctreePointCloudOccupancy's call). */
   void setOccupiedVoxelAtPoint(const PointT& point_arg);
   /** Skips points that are not finite, as PCL does. */
   void setOccupiedVoxelsAtPointsFromCloud(PointCloudPtr cloud_arg);
@@ -147,7 +173,10 @@ class OctreePointCloud {
   bool isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg,
                               const double point_z_arg) const;
   bool isVoxelOccupiedAtPoint(const index_t& point_idx_arg) const;
-  /** No-op outside the bounding box. */
+  /** The container of the leaf holding the point's voxel; nullptr if there is none. */
+  LeafContainerT* findLeafAtPoint(const PointT& point_arg) const;
+  /** Deletes the leaf holding the point's voxel (under dynamic depth, the shallow leaf); no-op outside the
+   * box. */
   void deleteVoxelAtPoint(const PointT& point_arg);
   void deleteVoxelAtPoint(const index_t& point_idx_arg);
 
@@ -159,6 +188,9 @@ class OctreePointCloud {
    */
   uindex_t getIntersectedVoxelCenters(Eigen::Vector3f origin, Eigen::Vector3f direction,
                                       AlignedPointTVector& voxel_center_list,
+                                      uindex_t max_voxel_count = 0) const;
+  /** The point indices of the voxels getIntersectedVoxelCenters finds, voxel by voxel. */
+  uindex_t getIntersectedVoxelIndices(Eigen::Vector3f origin, Eigen::Vector3f direction, Indices& k_indices,
                                       uindex_t max_voxel_count = 0) const;
   /** PCL's approximation: samples the segment every res*precision, appends each new voxel's centre. */
   uindex_t getApproxIntersectedVoxelCentersBySegment(const Eigen::Vector3f& origin,
@@ -210,11 +242,22 @@ class OctreePointCloud {
   /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
   void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg);
 
-  std::size_t getLeafCount() const { return std::size_t(tree_.getOccupiedCount()); }
+  std::size_t getLeafCount() const {
+    if constexpr (kHoldsLeaves)
+      return leaves_.size();
+    else
+      return std::size_t(tree_.getOccupiedCount());
+  }
   /** The branch nodes pcl::octree would hold for these voxels, its root included. */
   std::size_t getBranchCount() const;
   /** Empties the tree and resets the bounding box; the depth stays, as in PCL. */
   void deleteTree();
+  /**
+   * PCL's dynamic depth: a new leaf is made as shallow as the path allows, and a leaf that holds
+   * maxObjsPerLeaf points or more splits when the next point arrives. 0 turns it off. Only while the tree is
+   * empty. Leaves of OctreeContainerEmpty count no points, so they never split (as in PCL).
+   */
+  void enableDynamicDepth(std::size_t maxObjsPerLeaf);
 
   /** The FastOctTree holding the voxels (keys shifted from pcl::octree's; see pclKeyToTreeKey). */
   const FastOctTree& getFastOctTree() const { return tree_; }
@@ -225,33 +268,103 @@ class OctreePointCloud {
 
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 
- private:
+ protected:
+  /** Adds the input cloud's point point_idx_arg to its leaf; derived look-alikes add it their way. */
+  virtual void addPointIdx(uindex_t point_idx_arg);
+  /** The leaf holding the voxel at this PCL key, creating it (as PCL's createLeaf) if there is none. */
+  LeafNode* createLeaf(const octree::OctreeKey& key);
+  /** The leaf holding the voxel at this PCL key; nullptr if none. */
+  LeafNode* findLeaf(const octree::OctreeKey& key) const;
+  /** The leaf at this depth and key (a node's key, as iterators give it); nullptr if none. */
+  LeafNode* leafAt(const octree::OctreeKey& key, uindex_t depth) const;
   bool isPointWithinBoundingBox(double x, double y, double z) const {
     return !(x < min_[0] || y < min_[1] || z < min_[2] || x >= max_[0] || y >= max_[1] || z >= max_[2]);
   }
   /** PCL's key: (point - min) / resolution, truncated; only for points inside the box. */
   octree::OctreeKey pclKey(double x, double y, double z) const;
   void pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const;
+  /** PCL's genVoxelCenterFromOctreeKey: the centre of the node at this depth and key. */
+  void voxelCenter(const octree::OctreeKey& key, uindex_t depth, PointT& point) const;
   /** PCL's adoptBoundingBoxToPoint; false (with PCL_ERROR) if the box would leave the key range. */
   bool adoptBoundingBoxToPoint(double x, double y, double z);
-  void getKeyBitSize();
+  /** Bumped by every change of the leaves, so that caches built from them know when they are stale. */
+  std::uint64_t version() const { return version_; }
+  /** Calls visit(container) for every leaf, in no particular order. */
+  template <typename Visit>
+  void forEachLeaf(Visit&& visit) const {
+    if constexpr (kHoldsLeaves)
+      for (const auto& leaf : leaves_) visit(leaf.second.getContainer());
+  }
+  /** Empties the leaves but keeps the bounding box (a new buffer of OctreePointCloudChangeDetector). */
+  void clearLeaves() {
+    tree_.clear();
+    leaves_.clear();
+    phantoms_.clear();
+    ++version_;
+  }
+  /** Whether the node at this depth and key exists in the octree PCL would build. */
+  bool nodeExists(const octree::OctreeKey& key, uindex_t depth) const;
   /** The occupied voxels' PCL keys in pcl::octree's depth-first order. */
   std::vector<octree::OctreeKey> sortedLeafKeys() const;
+  /** The leaves as (key, depth), keys at full depth (each cube's first voxel), in depth-first order. */
+  std::vector<std::pair<octree::OctreeKey, uindex_t>> sortedLeaves() const;
+
+  PointCloudConstPtr input_;
+  IndicesConstPtr indices_;
+  uindex_t depth_ = 0;
+
+ private:
+  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
+  struct LeafId {
+    Key corner;
+    std::uint32_t level;
+    bool operator==(const LeafId& o) const {
+      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
+    }
+  };
+  struct LeafIdHash {
+    std::size_t operator()(const LeafId& id) const {
+      std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) *
+           0x165667B19E3779F9ULL;
+      return std::size_t(h ^ (h >> 29));
+    }
+  };
+  /** The cube at this level holding the tree key k, aligned on PCL's grid. */
+  LeafId cubeOf(const Key& k, std::uint32_t level) const;
+  /** Whether the cube holds an occupied cell or an empty old root. */
+  bool cubeHasContent(const LeafId& cube) const;
+  /**
+   * The leaf on the path to the tree key k, as PCL's descent finds it: the first leaf from the root down;
+   * `id` is its cube. Without one, `id` is where PCL would create it (at full depth without dynamic depth).
+   */
+  LeafNode* leafOnPath(const Key& k, LeafId& id) const;
+  /** createLeaf at a tree key; `id` tells which leaf holds it. */
+  LeafNode* createLeafAt(const Key& k, LeafId& id);
+  /** Calls visit(key) for each occupied voxel the ray crosses in the box, near to far, while it returns true.
+   */
+  template <typename Visit>
+  void walkRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, Visit&& visit) const;
+  /** PCL's expandLeafNode: the leaf becomes a branch, its points go to new leaves one level down. */
+  void expandLeaf(const LeafId& id);
+  void getKeyBitSize();
   /** The nodes pcl::octree would hold for these voxels, in its depth-first order, down to max_depth (0: all).
    */
   std::vector<Node> depthFirstNodes(uindex_t max_depth) const;
   /** An iterator's maximum depth, as PCL's keeps it: the tree's depth for 0. */
   uindex_t iteratorDepth(uindex_t max_depth) const { return max_depth == 0 ? depth_ : max_depth; }
 
-  PointCloudConstPtr input_;
-  IndicesConstPtr indices_;
   double epsilon_ = 0.0;
   double resolution_;
   double min_[3] = {0, 0, 0}, max_[3] = {0, 0, 0};
   bool bounding_box_defined_ = false;
-  uindex_t depth_ = 0;
   std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
   FastOctTree tree_;
+  // Only when kHoldsLeaves. Mutable as PCL's nodes are: const lookups hand out leaves callers may fill.
+  mutable std::unordered_map<LeafId, LeafNode, LeafIdHash> leaves_;
+  std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
+  std::uint64_t version_ = 0;
   /**
    * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
    * only a deletion beneath it removes. These nested cubes (tree keys) keep getBranchCount exact.
@@ -263,9 +376,10 @@ class OctreePointCloud {
   std::vector<Phantom> phantoms_;
 };
 
-/** The name under which PCL offers occupancy octrees. */
-template <typename PointT>
-using OctreePointCloudOccupancy = OctreePointCloud<PointT>;
+/** PCL's occupancy octree: its leaves are the tree's cells and hold nothing. */
+template <typename PointT, typename LeafContainerT = OctreeContainerEmpty,
+          typename BranchContainerT = OctreeContainerEmpty>
+using OctreePointCloudOccupancy = OctreePointCloud<PointT, LeafContainerT, BranchContainerT>;
 
 }  // namespace fot
 }  // namespace pcl

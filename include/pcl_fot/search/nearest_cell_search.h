@@ -10,8 +10,12 @@
 namespace pcl {
 namespace fot {
 
-/** Manhattan (L1) distances, or Euclidean ones, which are reported squared as in PCL. */
-enum class Metric { Manhattan, Euclidean };
+/**
+ * Manhattan (L1) distances, or Euclidean ones, which are reported squared as in PCL. Point distances are
+ * summed in float as PCL's searches sum them: Euclidean as FLANN, (dx² + dy²) + dz²; EuclideanEigen as
+ * pcl::octree (Eigen's squaredNorm), dx² + (dy² + dz²). Cell distances are the same integers for both.
+ */
+enum class Metric { Manhattan, Euclidean, EuclideanEigen };
 
 /** A cell found by NearestCellSearch, with its distance in cells (squared for the Euclidean metric). */
 struct CellMatch {

@@ -47,21 +47,21 @@ struct PclOrderCode {
 
 }  // namespace detail
 
-template <typename PointT>
-OctreePointCloud<PointT>::OctreePointCloud(const double resolution_arg)
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::OctreePointCloud(const double resolution_arg)
     : resolution_(resolution_arg), tree_(resolution_arg) {
   max_[0] = max_[1] = max_[2] = resolution_arg;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::setInputCloud(const PointCloudConstPtr& cloud_arg,
-                                             const IndicesConstPtr& indices_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::setInputCloud(
+    const PointCloudConstPtr& cloud_arg, const IndicesConstPtr& indices_arg) {
   input_ = cloud_arg;
   indices_ = indices_arg;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::setResolution(double resolution_arg) {
   if (getLeafCount() != 0) {
     PCL_ERROR(
         "[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
@@ -77,8 +77,9 @@ void OctreePointCloud<PointT>::setResolution(double resolution_arg) {
   getKeyBitSize();
 }
 
-template <typename PointT>
-octree::OctreeKey OctreePointCloud<PointT>::pclKey(double x, double y, double z) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+octree::OctreeKey OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::pclKey(double x, double y,
+                                                                                     double z) const {
   // A point just inside the box's far face can round to one voxel past it; pcl::octree asserts there.
   const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << depth_) - 1);
   return octree::OctreeKey(std::min(static_cast<uindex_t>((x - min_[0]) / resolution_), last),
@@ -86,15 +87,34 @@ octree::OctreeKey OctreePointCloud<PointT>::pclKey(double x, double y, double z)
                            std::min(static_cast<uindex_t>((z - min_[2]) / resolution_), last));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::pclKeyToCenter(const octree::OctreeKey& key,
+                                                                                PointT& point) const {
   point.x = static_cast<float>((static_cast<double>(key.x) + 0.5f) * resolution_ + min_[0]);
   point.y = static_cast<float>((static_cast<double>(key.y) + 0.5f) * resolution_ + min_[1]);
   point.z = static_cast<float>((static_cast<double>(key.z) + 0.5f) * resolution_ + min_[2]);
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::getKeyBitSize() {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::voxelCenter(const octree::OctreeKey& key,
+                                                                             uindex_t depth,
+                                                                             PointT& point) const {
+  const double side = resolution_ * static_cast<double>(std::uint64_t(1) << (depth_ - depth));
+  point.x = static_cast<float>((static_cast<double>(key.x) + 0.5f) * side + min_[0]);
+  point.y = static_cast<float>((static_cast<double>(key.y) + 0.5f) * side + min_[1]);
+  point.z = static_cast<float>((static_cast<double>(key.z) + 0.5f) * side + min_[2]);
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+OctreeNode* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator::getCurrentOctreeNode()
+    const {
+  if (node().leaf) return tree_->leafAt(node().key, node().depth);
+  static BranchNode branch;  // branches hold nothing here; one node tells their type
+  return &branch;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getKeyBitSize() {
   // PCL's arithmetic, step for step, so that the box comes out bit for bit the same.
   const float min_value = std::numeric_limits<float>::epsilon();
   uindex_t max_voxels = 2;
@@ -117,8 +137,9 @@ void OctreePointCloud<PointT>::getKeyBitSize() {
   }
 }
 
-template <typename PointT>
-bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, double z) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::adoptBoundingBoxToPoint(double x, double y,
+                                                                                         double z) {
   const float min_value = std::numeric_limits<float>::epsilon();
   const double p[3] = {x, y, z};
   // A point that does not fit leaves the box as it was, not grown part of the way.
@@ -173,25 +194,187 @@ bool OctreePointCloud<PointT>::adoptBoundingBoxToPoint(double x, double y, doubl
   }
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::setOccupiedVoxelAtPoint(const PointT& point_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafId
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::cubeOf(const Key& k, std::uint32_t level) const {
+  const auto align = [&](std::int32_t v, std::int32_t offset) {
+    return std::int32_t(((std::uint32_t(v - offset) >> level) << level) + std::uint32_t(offset));
+  };
+  return LeafId{Key{align(k.x, offset_[0]), align(k.y, offset_[1]), align(k.z, offset_[2])}, level};
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::cubeHasContent(const LeafId& cube) const {
+  const std::int32_t last = std::int32_t((std::int64_t(1) << cube.level) - 1);
+  const Key hi{cube.corner.x + last, cube.corner.y + last, cube.corner.z + last};
+  for (const Phantom& ph : phantoms_)
+    if (ph.level <= cube.level && ph.min.x >= cube.corner.x && ph.min.x <= hi.x &&
+        ph.min.y >= cube.corner.y && ph.min.y <= hi.y && ph.min.z >= cube.corner.z && ph.min.z <= hi.z)
+      return true;
+  bool occupied = false;
+  tree_.forEachRegionInBox(cube.corner, hi, [&](const Region& r) {
+    occupied = r.state == CellState::Occupied;
+    return !occupied;
+  });
+  return occupied;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::leafOnPath(const Key& k, LeafId& id) const {
+  if (max_objs_per_leaf_ == 0) {
+    id = LeafId{k, 0};
+    const auto it = leaves_.find(id);
+    return it == leaves_.end() ? nullptr : &it->second;
+  }
+  // PCL's descent: the root is a branch; below it, the first leaf, or the first node missing.
+  for (std::uint32_t level = depth_ - 1;; --level) {
+    id = cubeOf(k, level);
+    const auto it = leaves_.find(id);
+    if (it != leaves_.end()) return &it->second;
+    if (level == 0 || !cubeHasContent(id)) return nullptr;
+  }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeaf(const octree::OctreeKey& key) {
+  const Key k = pclKeyToTreeKey(key);
+  LeafId id;
+  LeafNode* leaf = createLeafAt(k, id);
+  tree_.setCell(k, CellState::Occupied);
+  return leaf;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeafAt(const Key& k, LeafId& id) {
+  ++version_;
+  if constexpr (!kHoldsLeaves) {
+    tree_.setCell(k, CellState::Occupied);
+    id = LeafId{k, 0};
+    return leafAt(
+        octree::OctreeKey(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]), uindex_t(k.z - offset_[2])),
+        depth_);
+  } else {
+    if (max_objs_per_leaf_ == 0) {
+      id = LeafId{k, 0};
+      const auto [it, inserted] = leaves_.try_emplace(id);
+      if (inserted) tree_.setCell(k, CellState::Occupied);
+      return &it->second;
+    }
+    // The caller marks the cell once the point is in its leaf: a leaf about to split must not see it.
+    LeafNode* leaf = leafOnPath(k, id);
+    return leaf ? leaf : &leaves_.try_emplace(id).first->second;
+  }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::findLeaf(const octree::OctreeKey& key) const {
+  if constexpr (!kHoldsLeaves) {
+    return leafAt(key, depth_);
+  } else {
+    LeafId id;
+    return leafOnPath(pclKeyToTreeKey(key), id);
+  }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::leafAt(const octree::OctreeKey& key,
+                                                                   uindex_t depth) const {
+  const std::uint32_t level = depth_ - depth;
+  const Key corner = pclKeyToTreeKey(octree::OctreeKey(key.x << level, key.y << level, key.z << level));
+  if constexpr (!kHoldsLeaves) {
+    // Occupancy leaves hold nothing: every one answers with the same empty node.
+    static LeafNode empty_leaf;
+    return level == 0 && tree_.getCell(corner) == CellState::Occupied ? &empty_leaf : nullptr;
+  } else {
+    const auto it = leaves_.find(LeafId{corner, level});
+    return it == leaves_.end() ? nullptr : &it->second;
+  }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::nodeExists(const octree::OctreeKey& key,
+                                                                            uindex_t depth) const {
+  if (depth == 0) return true;
+  const std::uint32_t level = depth_ - depth;
+  const Key corner = pclKeyToTreeKey(octree::OctreeKey(key.x << level, key.y << level, key.z << level));
+  if constexpr (kHoldsLeaves)
+    if (leaves_.count(LeafId{corner, level})) return true;
+  return cubeHasContent(LeafId{corner, level});
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::expandLeaf(const LeafId& id) {
+  const auto it = leaves_.find(id);
+  Indices indices;
+  it->second.getContainer().getPointIndices(indices);
+  leaves_.erase(it);
+  for (const index_t index : indices) {
+    const PointT& p = (*input_)[index];
+    const Key k = pclKeyToTreeKey(pclKey(p.x, p.y, p.z));
+    leaves_.try_emplace(cubeOf(k, id.level - 1)).first->second.getContainer().addPointIndex(index);
+  }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointIdx(uindex_t point_idx_arg) {
+  const PointT& point = (*input_)[point_idx_arg];
+  if (!isFinite(point)) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud] Point %zu is not finite; it is not added.\n",
+              static_cast<std::size_t>(point_idx_arg));
+    return;
+  }
+  if (!adoptBoundingBoxToPoint(point.x, point.y, point.z)) return;
+  const Key k = pclKeyToTreeKey(pclKey(point.x, point.y, point.z));
+  LeafId id;
+  LeafNode* leaf = createLeafAt(k, id);
+  if constexpr (kHoldsLeaves) {
+    if (max_objs_per_leaf_ != 0) {
+      while (id.level > 0 && (*leaf)->getSize() >= max_objs_per_leaf_) {
+        expandLeaf(id);
+        leaf = createLeafAt(k, id);
+      }
+      tree_.setCell(k, CellState::Occupied);  // a shallow leaf's cube keeps every point's cell
+    }
+  }
+  (*leaf)->addPointIndex(static_cast<index_t>(point_idx_arg));
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::enableDynamicDepth(
+    std::size_t maxObjsPerLeaf) {
+  if (getLeafCount() != 0) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::enableDynamicDepth] The octree must be empty.\n");
+    return;
+  }
+  max_objs_per_leaf_ = maxObjsPerLeaf;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::setOccupiedVoxelAtPoint(
+    const PointT& point_arg) {
   if (!isFinite(point_arg)) {
     PCL_ERROR(
         "[pcl::fot::OctreePointCloud::setOccupiedVoxelAtPoint] The point is not finite; it is not added.\n");
     return;
   }
   if (!adoptBoundingBoxToPoint(point_arg.x, point_arg.y, point_arg.z)) return;
-  tree_.setCell(pclKeyToTreeKey(pclKey(point_arg.x, point_arg.y, point_arg.z)), CellState::Occupied);
+  createLeaf(pclKey(point_arg.x, point_arg.y, point_arg.z));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::setOccupiedVoxelsAtPointsFromCloud(PointCloudPtr cloud_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::setOccupiedVoxelsAtPointsFromCloud(
+    PointCloudPtr cloud_arg) {
   for (const auto& p : *cloud_arg)
     if (isFinite(p)) setOccupiedVoxelAtPoint(p);
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::addPointsFromInputCloud() {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointsFromInputCloud() {
   if (!input_) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] No input cloud.\n");
     return;
@@ -203,56 +386,67 @@ void OctreePointCloud<PointT>::addPointsFromInputCloud() {
                   index);
         continue;
       }
-      if (isFinite((*input_)[index])) setOccupiedVoxelAtPoint((*input_)[index]);
+      if (isFinite((*input_)[index])) addPointIdx(static_cast<uindex_t>(index));
     }
     return;
   }
-  for (const auto& p : *input_)
-    if (isFinite(p)) setOccupiedVoxelAtPoint(p);
+  for (std::size_t i = 0; i < input_->size(); ++i)
+    if (isFinite((*input_)[i])) addPointIdx(static_cast<uindex_t>(i));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointFromCloud(uindex_t point_idx_arg,
+                                                                                   IndicesPtr indices_arg) {
   if (!input_ || point_idx_arg >= input_->size()) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointFromCloud] Index %zu is outside the input cloud.\n",
               static_cast<std::size_t>(point_idx_arg));
     return;
   }
-  setOccupiedVoxelAtPoint((*input_)[point_idx_arg]);
+  addPointIdx(point_idx_arg);
   if (indices_arg) indices_arg->push_back(static_cast<index_t>(point_idx_arg));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg) {
-  if (cloud_arg != input_) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointToCloud(const PointT& point_arg,
+                                                                                 PointCloudPtr cloud_arg) {
+  if (!cloud_arg || cloud_arg != input_) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointToCloud] The cloud must be the input cloud.\n");
     return;
   }
   cloud_arg->push_back(point_arg);
-  setOccupiedVoxelAtPoint(point_arg);
+  addPointIdx(static_cast<uindex_t>(cloud_arg->size() - 1));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg,
-                                               IndicesPtr indices_arg) {
-  if (cloud_arg != input_ || indices_arg != indices_) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointToCloud(const PointT& point_arg,
+                                                                                 PointCloudPtr cloud_arg,
+                                                                                 IndicesPtr indices_arg) {
+  if (!cloud_arg || cloud_arg != input_ || !indices_arg || indices_arg != indices_) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointToCloud] The cloud and indices must be the input's.\n");
     return;
   }
   cloud_arg->push_back(point_arg);
   indices_arg->push_back(static_cast<index_t>(cloud_arg->size()) - 1);
-  setOccupiedVoxelAtPoint(point_arg);
+  addPointIdx(static_cast<uindex_t>(cloud_arg->size() - 1));
 }
 
-template <typename PointT>
-bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const PointT& point_arg) const {
-  if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return false;
-  return tree_.getCell(pclKeyToTreeKey(pclKey(point_arg.x, point_arg.y, point_arg.z))) == CellState::Occupied;
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::isVoxelOccupiedAtPoint(
+    const PointT& point_arg) const {
+  return findLeafAtPoint(point_arg) != nullptr;
 }
 
-template <typename PointT>
-bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg,
-                                                      const double point_z_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+LeafContainerT* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::findLeafAtPoint(
+    const PointT& point_arg) const {
+  if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return nullptr;
+  LeafNode* leaf = findLeaf(pclKey(point_arg.x, point_arg.y, point_arg.z));
+  return leaf ? leaf->getContainerPtr() : nullptr;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::isVoxelOccupiedAtPoint(
+    const double point_x_arg, const double point_y_arg, const double point_z_arg) const {
   PointT point;  // through PointT's floats, as PCL does
   point.x = point_x_arg;
   point.y = point_y_arg;
@@ -260,8 +454,9 @@ bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const double point_x_arg, 
   return isVoxelOccupiedAtPoint(point);
 }
 
-template <typename PointT>
-bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const index_t& point_idx_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::isVoxelOccupiedAtPoint(
+    const index_t& point_idx_arg) const {
   if (!input_ || point_idx_arg < 0 || static_cast<std::size_t>(point_idx_arg) >= input_->size()) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::isVoxelOccupiedAtPoint] Index %d is not in the input cloud.\n",
               point_idx_arg);
@@ -270,25 +465,40 @@ bool OctreePointCloud<PointT>::isVoxelOccupiedAtPoint(const index_t& point_idx_a
   return isVoxelOccupiedAtPoint((*input_)[point_idx_arg]);
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::deleteVoxelAtPoint(const PointT& point_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::deleteVoxelAtPoint(const PointT& point_arg) {
   if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return;
   const octree::OctreeKey key = pclKey(point_arg.x, point_arg.y, point_arg.z);
   removeLeaf(key.x, key.y, key.z);
 }
 
-template <typename PointT>
-bool OctreePointCloud<PointT>::existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::existLeaf(uindex_t idx_x_arg,
+                                                                           uindex_t idx_y_arg,
+                                                                           uindex_t idx_z_arg) const {
   if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return false;
-  return tree_.getCell(pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))) ==
-         CellState::Occupied;
+  return findLeaf(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg)) != nullptr;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::removeLeaf(uindex_t idx_x_arg,
+                                                                            uindex_t idx_y_arg,
+                                                                            uindex_t idx_z_arg) {
   if (((idx_x_arg | idx_y_arg | idx_z_arg) >> depth_) != 0) return;
   const Key target = pclKeyToTreeKey(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg));
-  tree_.eraseCell(target);
+  ++version_;
+  if constexpr (kHoldsLeaves) {
+    // The first leaf on the path goes, with every cell of its cube.
+    LeafId id;
+    if (leafOnPath(target, id)) {
+      const std::int32_t last = std::int32_t((std::int64_t(1) << id.level) - 1);
+      leaves_.erase(id);
+      tree_.setBox(id.corner, Key{id.corner.x + last, id.corner.y + last, id.corner.z + last},
+                   CellState::Unknown);
+    }
+  } else {
+    tree_.eraseCell(target);
+  }
   // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
   // so the smallest goes first, and each larger one only once nothing is left inside it.
   std::sort(phantoms_.begin(), phantoms_.end(),
@@ -310,8 +520,9 @@ void OctreePointCloud<PointT>::removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg
   }
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::deleteVoxelAtPoint(const index_t& point_idx_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::deleteVoxelAtPoint(
+    const index_t& point_idx_arg) {
   if (!input_ || point_idx_arg < 0 || static_cast<std::size_t>(point_idx_arg) >= input_->size()) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::deleteVoxelAtPoint] Index %d is not in the input cloud.\n",
               point_idx_arg);
@@ -320,57 +531,74 @@ void OctreePointCloud<PointT>::deleteVoxelAtPoint(const index_t& point_idx_arg) 
   deleteVoxelAtPoint((*input_)[point_idx_arg]);
 }
 
-template <typename PointT>
-std::vector<octree::OctreeKey> OctreePointCloud<PointT>::sortedLeafKeys() const {
-  std::vector<std::pair<detail::PclOrderCode, octree::OctreeKey>> coded;
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+std::vector<std::pair<octree::OctreeKey, uindex_t>>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::sortedLeaves() const {
+  std::vector<std::pair<detail::PclOrderCode, std::pair<octree::OctreeKey, uindex_t>>> coded;
   coded.reserve(getLeafCount());
-  tree_.forEachCell(CellState::Occupied, [&](const Key& k) {
+  const auto add = [&](const Key& k, std::uint32_t level) {
     const octree::OctreeKey key(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]),
                                 uindex_t(k.z - offset_[2]));
-    coded.emplace_back(detail::PclOrderCode(key), key);
-  });
+    coded.emplace_back(detail::PclOrderCode(key), std::make_pair(key, depth_ - level));
+  };
+  if constexpr (kHoldsLeaves)
+    for (const auto& leaf : leaves_) add(leaf.first.corner, leaf.first.level);
+  else
+    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { add(k, 0); });
   std::sort(coded.begin(), coded.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::pair<octree::OctreeKey, uindex_t>> leaves;
+  leaves.reserve(coded.size());
+  for (const auto& c : coded) leaves.push_back(c.second);
+  return leaves;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+std::vector<octree::OctreeKey> OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::sortedLeafKeys()
+    const {
   std::vector<octree::OctreeKey> keys;
-  keys.reserve(coded.size());
-  for (const auto& c : coded) keys.push_back(c.second);
+  for (const auto& leaf : sortedLeaves()) keys.push_back(leaf.first);
   return keys;
 }
 
-template <typename PointT>
-uindex_t OctreePointCloud<PointT>::getOccupiedVoxelCenters(AlignedPointTVector& voxel_center_list_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getOccupiedVoxelCenters(
+    AlignedPointTVector& voxel_center_list_arg) const {
   voxel_center_list_arg.clear();
-  for (const auto& key : sortedLeafKeys()) {
+  for (const auto& [key, depth] : sortedLeaves()) {
+    // As PCL: a shallow leaf's key, of its own depth, is taken as a voxel's.
+    const uindex_t level = depth_ - depth;
     PointT center;
-    pclKeyToCenter(key, center);
+    pclKeyToCenter(octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), center);
     voxel_center_list_arg.push_back(center);
   }
   return static_cast<uindex_t>(voxel_center_list_arg.size());
 }
 
-template <typename PointT>
-std::vector<typename OctreePointCloud<PointT>::Node> OctreePointCloud<PointT>::depthFirstNodes(
-    uindex_t max_depth) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+std::vector<typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::Node>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::depthFirstNodes(uindex_t max_depth) const {
   if (max_depth == 0 || max_depth > depth_) max_depth = depth_;
   // The nodes come from markers, in depth-first order: each voxel, and each empty old root that PCL keeps.
   // Each marker brings the ancestors the previous markers did not.
   struct Marker {
     octree::OctreeKey corner;  // the cube's first voxel
     uindex_t depth;
+    bool leaf;
   };
   std::vector<Marker> markers;
-  const std::vector<octree::OctreeKey> keys = sortedLeafKeys();
-  markers.reserve(keys.size() + phantoms_.size());
-  for (const auto& k : keys) markers.push_back({k, depth_});
+  const auto leaves = sortedLeaves();
+  markers.reserve(leaves.size() + phantoms_.size());
+  for (const auto& [key, depth] : leaves) markers.push_back({key, depth, true});
   for (const Phantom& ph : phantoms_)
     markers.push_back({octree::OctreeKey(uindex_t(ph.min.x - offset_[0]), uindex_t(ph.min.y - offset_[1]),
                                          uindex_t(ph.min.z - offset_[2])),
-                       depth_ - ph.level});
+                       depth_ - ph.level, false});
   // The voxels are in order; the old roots merge in, a cube before what it contains from the same corner.
   const auto before = [](const Marker& a, const Marker& b) {
     const detail::PclOrderCode ca(a.corner), cb(b.corner);
     return ca < cb || (!(cb < ca) && a.depth < b.depth);
   };
-  const auto voxels_end = markers.begin() + std::ptrdiff_t(keys.size());
+  const auto voxels_end = markers.begin() + std::ptrdiff_t(leaves.size());
   std::sort(voxels_end, markers.end(), before);
   std::inplace_merge(markers.begin(), voxels_end, markers.end(), before);
 
@@ -391,7 +619,7 @@ std::vector<typename OctreePointCloud<PointT>::Node> OctreePointCloud<PointT>::d
       const octree::OctreeKey key(m.corner.x >> shift, m.corner.y >> shift, m.corner.z >> shift);
       nodes[path.back()].children |= std::uint8_t(1u << ((key.x & 1) << 2 | (key.y & 1) << 1 | (key.z & 1)));
       path.push_back(nodes.size());
-      nodes.push_back({key, depth, 0, depth == depth_});
+      nodes.push_back({key, depth, 0, depth == m.depth && m.leaf});
     }
     path_corner = m.corner;
   }
@@ -403,22 +631,24 @@ std::vector<typename OctreePointCloud<PointT>::Node> OctreePointCloud<PointT>::d
   return nodes;
 }
 
-template <typename PointT>
-std::size_t OctreePointCloud<PointT>::getBranchCount() const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+std::size_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getBranchCount() const {
   const std::vector<Node> nodes = depthFirstNodes(0);
   return std::size_t(std::count_if(nodes.begin(), nodes.end(), [](const Node& n) { return !n.leaf; }));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::deleteTree() {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::deleteTree() {
   min_[0] = min_[1] = min_[2] = max_[0] = max_[1] = max_[2] = 0;
   bounding_box_defined_ = false;
   tree_.clear();
+  leaves_.clear();
   phantoms_.clear();
+  ++version_;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::defineBoundingBox() {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::defineBoundingBox() {
   if (!input_) {
     PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] No input cloud.\n");
     return;
@@ -429,10 +659,10 @@ void OctreePointCloud<PointT>::defineBoundingBox() {
   defineBoundingBox(lo.x, lo.y, lo.z, hi.x + min_value, hi.y + min_value, hi.z + min_value);
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::defineBoundingBox(const double min_x_arg, const double min_y_arg,
-                                                 const double min_z_arg, const double max_x_arg,
-                                                 const double max_y_arg, const double max_z_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::defineBoundingBox(
+    const double min_x_arg, const double min_y_arg, const double min_z_arg, const double max_x_arg,
+    const double max_y_arg, const double max_z_arg) {
   if (getLeafCount() != 0) {
     PCL_ERROR(
         "[pcl::fot::OctreePointCloud::defineBoundingBox] The octree must be empty to define its box.\n");
@@ -467,21 +697,23 @@ void OctreePointCloud<PointT>::defineBoundingBox(const double min_x_arg, const d
   bounding_box_defined_ = true;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::defineBoundingBox(const double max_x_arg, const double max_y_arg,
-                                                 const double max_z_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::defineBoundingBox(const double max_x_arg,
+                                                                                   const double max_y_arg,
+                                                                                   const double max_z_arg) {
   defineBoundingBox(std::min(0.0, max_x_arg), std::min(0.0, max_y_arg), std::min(0.0, max_z_arg),
                     std::max(0.0, max_x_arg), std::max(0.0, max_y_arg), std::max(0.0, max_z_arg));
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::defineBoundingBox(const double cubeLen_arg) {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::defineBoundingBox(const double cubeLen_arg) {
   defineBoundingBox(cubeLen_arg, cubeLen_arg, cubeLen_arg);
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::getBoundingBox(double& min_x_arg, double& min_y_arg, double& min_z_arg,
-                                              double& max_x_arg, double& max_y_arg, double& max_z_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getBoundingBox(
+    double& min_x_arg, double& min_y_arg, double& min_z_arg, double& max_x_arg, double& max_y_arg,
+    double& max_z_arg) const {
   min_x_arg = min_[0];
   min_y_arg = min_[1];
   min_z_arg = min_[2];
@@ -490,15 +722,16 @@ void OctreePointCloud<PointT>::getBoundingBox(double& min_x_arg, double& min_y_a
   max_z_arg = max_[2];
 }
 
-template <typename PointT>
-double OctreePointCloud<PointT>::getVoxelSquaredSideLen(uindex_t tree_depth_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+double OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getVoxelSquaredSideLen(
+    uindex_t tree_depth_arg) const {
   const double side = std::ldexp(resolution_, int(depth_) - int(tree_depth_arg));
   return side * side;
 }
 
-template <typename PointT>
-void OctreePointCloud<PointT>::getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt,
-                                              Eigen::Vector3f& max_pt) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getVoxelBounds(
+    const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const {
   const octree::OctreeKey& key = iterator.getCurrentOctreeKey();
   const double side = std::ldexp(resolution_, int(depth_) - int(iterator.getCurrentOctreeDepth()));
   const uindex_t k[3] = {key.x, key.y, key.z};
@@ -508,16 +741,16 @@ void OctreePointCloud<PointT>::getVoxelBounds(const NodeIterator& iterator, Eige
   }
 }
 
-template <typename PointT>
-typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::begin(
-    uindex_t max_depth_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::begin(uindex_t max_depth_arg) const {
   return NodeIterator(this, iteratorDepth(max_depth_arg),
                       std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
 }
 
-template <typename PointT>
-typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::breadth_begin(
-    uindex_t max_depth_arg) const {
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::breadth_begin(uindex_t max_depth_arg) const {
   std::vector<Node> nodes = depthFirstNodes(max_depth_arg);
   // Depth-first order restricted to one depth is that depth's breadth-first order.
   std::stable_sort(nodes.begin(), nodes.end(),
@@ -526,8 +759,9 @@ typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::breadt
                       std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
-template <typename PointT>
-typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::fixed_depth_begin(
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::fixed_depth_begin(
     uindex_t fixed_depth_arg) const {
   if (fixed_depth_arg > depth_) {
     PCL_WARN(
@@ -543,19 +777,23 @@ typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::fixed_
                       std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
-template <typename PointT>
-typename OctreePointCloud<PointT>::NodeIterator OctreePointCloud<PointT>::leaf_depth_begin(
-    uindex_t max_depth_arg) const {
-  if (max_depth_arg != 0 && max_depth_arg < depth_) return end();
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::leaf_depth_begin(uindex_t max_depth_arg) const {
   std::vector<Node> nodes;
   nodes.reserve(getLeafCount());
-  for (const auto& key : sortedLeafKeys()) nodes.push_back({key, depth_, 0, true});
+  for (const auto& [key, depth] : sortedLeaves())
+    if (max_depth_arg == 0 || depth <= max_depth_arg) {
+      const uindex_t level = depth_ - depth;  // as in PCL, a node's key holds only the bits of its depth
+      nodes.push_back({octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), depth, 0, true});
+    }
   return NodeIterator(this, iteratorDepth(max_depth_arg),
                       std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
-template <typename PointT>
-uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+uindex_t
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getApproxIntersectedVoxelCentersBySegment(
     const Eigen::Vector3f& origin, const Eigen::Vector3f& end, AlignedPointTVector& voxel_center_list,
     float precision) {
   // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
@@ -614,21 +852,20 @@ uindex_t OctreePointCloud<PointT>::getApproxIntersectedVoxelCentersBySegment(
   return static_cast<uindex_t>(voxel_center_list.size());
 }
 
-template <typename PointT>
-uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f origin,
-                                                              Eigen::Vector3f direction,
-                                                              AlignedPointTVector& voxel_center_list,
-                                                              uindex_t max_voxel_count) const {
-  voxel_center_list.clear();
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+template <typename Visit>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::walkRay(const Eigen::Vector3f& origin,
+                                                                         const Eigen::Vector3f& direction,
+                                                                         Visit&& visit) const {
   const double norm = direction.cast<double>().norm();
-  if (!bounding_box_defined_ || !(norm > 0.0) || !std::isfinite(norm) || !origin.allFinite()) return 0;
+  if (!bounding_box_defined_ || !(norm > 0.0) || !std::isfinite(norm) || !origin.allFinite()) return;
   // Clip the ray to the box (slab test), then walk its cells from the entry on.
   double t_in = 0.0, t_out = std::numeric_limits<double>::infinity();
   double dir[3];
   for (int a = 0; a < 3; ++a) {
     dir[a] = double(direction[a]) / norm;
     if (dir[a] == 0.0) {
-      if (origin[a] < min_[a] || origin[a] >= max_[a]) return 0;
+      if (origin[a] < min_[a] || origin[a] >= max_[a]) return;
       continue;
     }
     double t0 = (min_[a] - origin[a]) / dir[a], t1 = (max_[a] - origin[a]) / dir[a];
@@ -636,7 +873,7 @@ uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f or
     t_in = std::max(t_in, t0);
     t_out = std::min(t_out, t1);
   }
-  if (t_in >= t_out) return 0;
+  if (t_in >= t_out) return;
   const std::int64_t cells = std::int64_t(1) << depth_;
   std::int32_t start[3];
   double rel[3];
@@ -653,18 +890,55 @@ uindex_t OctreePointCloud<PointT>::getIntersectedVoxelCenters(Eigen::Vector3f or
     const Key k = walker.key();
     if (k.x < 0 || k.y < 0 || k.z < 0 || k.x >= cells || k.y >= cells || k.z >= cells) break;
     const octree::OctreeKey pk(uindex_t(k.x), uindex_t(k.y), uindex_t(k.z));
-    if (cells_of.getCell(pclKeyToTreeKey(pk)) == CellState::Occupied) {
-      PointT center;
-      pclKeyToCenter(pk, center);
-      voxel_center_list.push_back(center);
-      if (max_voxel_count != 0 && voxel_center_list.size() >= max_voxel_count) break;
-    }
+    if (cells_of.getCell(pclKeyToTreeKey(pk)) == CellState::Occupied && !visit(pk)) break;
     walker.step();
   }
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getIntersectedVoxelCenters(
+    Eigen::Vector3f origin, Eigen::Vector3f direction, AlignedPointTVector& voxel_center_list,
+    uindex_t max_voxel_count) const {
+  voxel_center_list.clear();
+  walkRay(origin, direction, [&](const octree::OctreeKey& key) {
+    PointT center;
+    pclKeyToCenter(key, center);
+    voxel_center_list.push_back(center);
+    return max_voxel_count == 0 || voxel_center_list.size() < max_voxel_count;
+  });
   return static_cast<uindex_t>(voxel_center_list.size());
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getIntersectedVoxelIndices(
+    Eigen::Vector3f origin, Eigen::Vector3f direction, Indices& k_indices, uindex_t max_voxel_count) const {
+  k_indices.clear();
+  uindex_t voxels = 0;
+  const LeafNode* previous = nullptr;  // a shallow leaf spans several cells in a row
+  walkRay(origin, direction, [&](const octree::OctreeKey& key) {
+    const LeafNode* leaf = findLeaf(key);
+    if (!leaf || leaf == previous) return true;
+    previous = leaf;
+    leaf->getContainer().getPointIndices(k_indices);
+    return max_voxel_count == 0 || ++voxels < max_voxel_count;
+  });
+  return static_cast<uindex_t>(k_indices.size());
 }
 
 }  // namespace fot
 }  // namespace pcl
 
+// The look-alikes' leaves: point indices (OctreePointCloud, PointVector, Search, ChangeDetector), none
+// (Occupancy), one index (SinglePoint), a count (Density), a sum (VoxelCentroid), neighbours (Adjacency).
 #define PCL_INSTANTIATE_OctreePointCloud(T) template class PCL_EXPORTS pcl::fot::OctreePointCloud<T>;
+#define PCL_INSTANTIATE_OctreePointCloudOccupancy(T) \
+  template class PCL_EXPORTS pcl::fot::OctreePointCloud<T, pcl::fot::OctreeContainerEmpty>;
+#define PCL_INSTANTIATE_OctreePointCloudSinglePoint(T) \
+  template class PCL_EXPORTS pcl::fot::OctreePointCloud<T, pcl::fot::OctreeContainerPointIndex>;
+#define PCL_INSTANTIATE_OctreePointCloudDensity(T) \
+  template class PCL_EXPORTS pcl::fot::OctreePointCloud<T, pcl::fot::OctreePointCloudDensityContainer>;
+#define PCL_INSTANTIATE_OctreePointCloudVoxelCentroid(T) \
+  template class PCL_EXPORTS                             \
+      pcl::fot::OctreePointCloud<T, pcl::fot::OctreePointCloudVoxelCentroidContainer<T>>;
+#define PCL_INSTANTIATE_OctreePointCloudAdjacency(T) \
+  template class PCL_EXPORTS pcl::fot::OctreePointCloud<T, pcl::fot::OctreePointCloudAdjacencyContainer<T>>;
