@@ -104,9 +104,8 @@ class OctreePointCloudAdjacency : public OctreePointCloud<PointT, LeafContainerT
       const PointT p_u = voxel_adjacency_graph[u];
       for (auto n = leaf->cbegin(); n != leaf->cend(); ++n) {
         const VoxelID v = vertex_of.at(static_cast<LeafContainerT*>(*n));
-        const EdgeID edge = add_edge(u, v, voxel_adjacency_graph).first;
-        voxel_adjacency_graph[edge] =
-            (voxel_adjacency_graph[v].getVector3fMap() - p_u.getVector3fMap()).norm();
+        const float distance = (voxel_adjacency_graph[v].getVector3fMap() - p_u.getVector3fMap()).norm();
+        voxel_adjacency_graph[add_edge(u, v, distance, voxel_adjacency_graph).first] = distance;
       }
     }
   }

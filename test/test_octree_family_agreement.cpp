@@ -1,0 +1,248 @@
+// The pcl::octree look-alikes with leaves (point vectors, single points, densities, centroids, change
+// detection, adjacency) give pcl::octree's answers, call for call, on real scans and crowded clouds.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <map>
+#include <random>
+#include <string>
+
+#include <pcl/common/point_tests.h>
+#include <pcl/octree/octree_pointcloud_adjacency.h>
+#include <pcl/octree/octree_pointcloud_changedetector.h>
+#include <pcl/octree/octree_pointcloud_density.h>
+#include <pcl/octree/octree_pointcloud_pointvector.h>
+#include <pcl/octree/octree_pointcloud_singlepoint.h>
+#include <pcl/octree/octree_pointcloud_voxelcentroid.h>
+
+#include <pcl_fot/pcl/octree.h>
+
+#include "scan_data.h"
+
+using pcl::Indices;
+using pcl::PointXYZ;
+using Cloud = pcl::PointCloud<PointXYZ>;
+
+namespace {
+
+/** The leaves of both octrees, depth first: the same keys, depths and containers' points. */
+template <typename Reference, typename Ours>
+void expectSameLeaves(Reference& ref, Ours& ours) {
+  ASSERT_EQ(ref.getLeafCount(), ours.getLeafCount());
+  ASSERT_EQ(ref.getBranchCount(), ours.getBranchCount());
+  auto r = ref.leaf_depth_begin();
+  auto o = ours.leaf_depth_begin();
+  for (std::size_t n = 0; r != ref.leaf_depth_end(); ++r, ++o, ++n) {
+    ASSERT_TRUE(o != ours.leaf_depth_end()) << "ours ends after " << n << " leaves";
+    ASSERT_EQ(r.getCurrentOctreeKey(), o.getCurrentOctreeKey()) << "leaf " << n;
+    ASSERT_EQ(r.getCurrentOctreeDepth(), o.getCurrentOctreeDepth()) << "leaf " << n;
+    ASSERT_EQ(o.getCurrentOctreeNode()->getNodeType(), pcl::octree::LEAF_NODE);
+    Indices ri, oi;
+    r.getLeafContainer().getPointIndices(ri);
+    o.getLeafContainer().getPointIndices(oi);
+    ASSERT_EQ(ri, oi) << "leaf " << n;
+    ASSERT_EQ(r.getLeafContainer().getSize(), o.getLeafContainer().getSize());
+  }
+  EXPECT_TRUE(o == ours.leaf_depth_end());
+}
+
+template <typename Reference, typename Ours>
+void fill(Reference& ref, Ours& ours, const Cloud::Ptr& cloud, std::size_t max_per_leaf = 0) {
+  ref.setInputCloud(cloud);
+  ours.setInputCloud(cloud);
+  if (max_per_leaf) {
+    ref.enableDynamicDepth(max_per_leaf);
+    ours.enableDynamicDepth(max_per_leaf);
+  }
+  ref.addPointsFromInputCloud();
+  ours.addPointsFromInputCloud();
+}
+
+Cloud::Ptr randomCloud(std::size_t n, float side, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, side);
+  Cloud::Ptr cloud(new Cloud);
+  for (std::size_t i = 0; i < n; ++i) cloud->emplace_back(u(rng), u(rng), u(rng));
+  return cloud;
+}
+
+/** Every point four times over, in a few voxels: crowded leaves, duplicates. */
+Cloud::Ptr crowdedCloud() {
+  Cloud::Ptr cloud(new Cloud);
+  for (int copy = 0; copy < 4; ++copy)
+    for (int i = 0; i < 500; ++i) cloud->emplace_back(0.002f * (i % 10), 0.003f * (i % 7), 0.001f * (i % 13));
+  return cloud;
+}
+
+bool insideBox(const pcl::octree::OctreePointCloud<PointXYZ>& t, const PointXYZ& p) {
+  double lo[3], hi[3];
+  t.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  return p.x >= lo[0] && p.y >= lo[1] && p.z >= lo[2] && p.x < hi[0] && p.y < hi[1] && p.z < hi[2];
+}
+
+}  // namespace
+
+TEST(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
+  for (const auto& [cloud, res] :
+       {std::make_pair(pcl_fot_test::loadScan("kinect_capture0002.pcd"), 0.02),
+        std::make_pair(pcl_fot_test::loadScan("room_scan2.pcd"), 0.05), std::make_pair(crowdedCloud(), 0.004),
+        std::make_pair(randomCloud(3000, 5, 1), 0.1)})
+    for (const std::size_t max_per_leaf : {0, 3, 16}) {
+      SCOPED_TRACE(::testing::Message()
+                   << cloud->size() << " points at " << res << " m, dynamic depth " << max_per_leaf);
+      pcl::octree::OctreePointCloudPointVector<PointXYZ> ref(res);
+      pcl::fot::OctreePointCloudPointVector<PointXYZ> ours(res);
+      fill(ref, ours, cloud, max_per_leaf);
+      expectSameLeaves(ref, ours);
+      // Every iterator walks the same nodes.
+      std::size_t r_nodes = 0, o_nodes = 0;
+      for (auto it = ref.breadth_begin(); it != ref.breadth_end(); ++it) ++r_nodes;
+      for (auto it = ours.breadth_begin(); it != ours.breadth_end(); ++it) ++o_nodes;
+      EXPECT_EQ(r_nodes, o_nodes);
+      // Deleting voxels prunes the same way.
+      for (std::size_t i = 0; i < cloud->size(); i += 7) {
+        if (pcl::isFinite((*cloud)[i]) && insideBox(ref, (*cloud)[i])) {
+          ref.deleteVoxelAtPoint((*cloud)[i]);
+          ours.deleteVoxelAtPoint((*cloud)[i]);
+        }
+      }
+      expectSameLeaves(ref, ours);
+    }
+}
+
+TEST(OctreeFamilyAgreement, SinglePointKeepsTheLastIndex) {
+  const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  pcl::octree::OctreePointCloudSinglePoint<PointXYZ> ref(0.05);
+  pcl::fot::OctreePointCloudSinglePoint<PointXYZ> ours(0.05);
+  fill(ref, ours, cloud);
+  expectSameLeaves(ref, ours);
+}
+
+TEST(OctreeFamilyAgreement, DensityCountsEveryPoint) {
+  for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("kinect_capture0003.pcd"), 0.05),
+                                   std::make_pair(crowdedCloud(), 0.004)}) {
+    pcl::octree::OctreePointCloudDensity<PointXYZ> ref(res);
+    pcl::fot::OctreePointCloudDensity<PointXYZ> ours(res);
+    fill(ref, ours, cloud);
+    ASSERT_EQ(ref.getLeafCount(), ours.getLeafCount());
+    std::size_t total = 0;
+    for (auto it = ours.leaf_depth_begin(); it != ours.leaf_depth_end(); ++it)
+      total += it.getLeafContainer().getPointCounter();
+    std::size_t finite = 0;
+    for (const auto& p : *cloud) finite += pcl::isFinite(p);
+    EXPECT_EQ(total, finite);
+    for (std::size_t i = 0; i < cloud->size(); i += 13) {
+      const PointXYZ& p = (*cloud)[i];
+      if (pcl::isFinite(p)) {
+        ASSERT_EQ(ref.getVoxelDensityAtPoint(p), ours.getVoxelDensityAtPoint(p)) << i;
+      }
+    }
+    EXPECT_EQ(ours.getVoxelDensityAtPoint(PointXYZ(1e4f, 0, 0)), 0u) << "outside the box";
+  }
+}
+
+TEST(OctreeFamilyAgreement, VoxelCentroidsBitForBit) {
+  for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("room_scan1.pcd"), 0.1),
+                                   std::make_pair(pcl_fot_test::loadScan("terrain_samp11.pcd"), 1.0),
+                                   std::make_pair(crowdedCloud(), 0.004)}) {
+    pcl::octree::OctreePointCloudVoxelCentroid<PointXYZ> ref(res);
+    pcl::fot::OctreePointCloudVoxelCentroid<PointXYZ> ours(res);
+    fill(ref, ours, cloud);
+    pcl::octree::OctreePointCloudVoxelCentroid<PointXYZ>::AlignedPointTVector rc;
+    pcl::fot::OctreePointCloudVoxelCentroid<PointXYZ>::AlignedPointTVector oc;
+    ASSERT_EQ(ref.getVoxelCentroids(rc), ours.getVoxelCentroids(oc));
+    for (std::size_t i = 0; i < rc.size(); ++i) {
+      ASSERT_EQ(rc[i].x, oc[i].x) << i;
+      ASSERT_EQ(rc[i].y, oc[i].y) << i;
+      ASSERT_EQ(rc[i].z, oc[i].z) << i;
+    }
+    // PCL's getVoxelCentroidAtPoint does not compile (1.13): its leaves' centroids, by key, stand in.
+    std::map<std::array<pcl::uindex_t, 3>, PointXYZ> by_key;
+    for (auto it = ref.leaf_depth_begin(); it != ref.leaf_depth_end(); ++it) {
+      const auto& k = it.getCurrentOctreeKey();
+      it.getLeafContainer().getCentroid(by_key[{k.x, k.y, k.z}]);
+    }
+    double lo[3], hi[3];
+    ref.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    for (std::size_t i = 0; i < cloud->size(); i += 101) {
+      const PointXYZ& p = (*cloud)[i];
+      if (!pcl::isFinite(p)) continue;
+      PointXYZ o;
+      ASSERT_TRUE(ours.getVoxelCentroidAtPoint(p, o));
+      const PointXYZ& r = by_key.at({pcl::uindex_t((p.x - lo[0]) / res), pcl::uindex_t((p.y - lo[1]) / res),
+                                     pcl::uindex_t((p.z - lo[2]) / res)});
+      ASSERT_EQ(r.x, o.x);
+      ASSERT_EQ(r.y, o.y);
+      ASSERT_EQ(r.z, o.z);
+    }
+  }
+}
+
+TEST(OctreeFamilyAgreement, ChangeDetectorFindsTheSameNewPoints) {
+  // Two Kinect frames of one scene, and two room scans: the second cloud against the first.
+  for (const auto& [a, b, res] :
+       {std::make_tuple(std::string("kinect_capture0001.pcd"), std::string("kinect_capture0002.pcd"), 0.02),
+        std::make_tuple(std::string("room_scan1.pcd"), std::string("room_scan2.pcd"), 0.1)}) {
+    const auto first = pcl_fot_test::loadScan(a), second = pcl_fot_test::loadScan(b);
+    pcl::octree::OctreePointCloudChangeDetector<PointXYZ> ref(res);
+    pcl::fot::OctreePointCloudChangeDetector<PointXYZ> ours(res);
+    fill(ref, ours, first);
+    ref.switchBuffers();
+    ours.switchBuffers();
+    EXPECT_EQ(ours.getLeafCount(), 0u);
+    fill(ref, ours, second);
+    // PCL's iterators do not walk a double-buffered octree reliably (they can loop forever): no leaf walk.
+    ASSERT_EQ(ref.getLeafCount(), ours.getLeafCount());
+    for (const pcl::uindex_t min_points : {0u, 1u, 4u}) {
+      Indices ri, oi;
+      ASSERT_EQ(ref.getPointIndicesFromNewVoxels(ri, min_points),
+                ours.getPointIndicesFromNewVoxels(oi, min_points));
+      ASSERT_EQ(ri, oi) << a << " then " << b << ", at least " << min_points << " points";
+      EXPECT_FALSE(oi.empty());
+    }
+  }
+}
+
+TEST(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
+  for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("room_scan1.pcd"), 0.05),
+                                   std::make_pair(pcl_fot_test::loadScan("kinect_capture0001.pcd"), 0.01)}) {
+    pcl::octree::OctreePointCloudAdjacency<PointXYZ> ref(res);
+    pcl::fot::OctreePointCloudAdjacency<PointXYZ> ours(res);
+    ref.setInputCloud(cloud);
+    ours.setInputCloud(cloud);
+    ref.addPointsFromInputCloud();
+    ours.addPointsFromInputCloud();
+    ASSERT_EQ(ref.size(), ours.size());
+    auto r = ref.leaf_depth_begin();
+    auto o = ours.leaf_depth_begin();
+    for (; r != ref.leaf_depth_end(); ++r, ++o) {
+      ASSERT_EQ(r.getCurrentOctreeKey(), o.getCurrentOctreeKey());
+      ASSERT_EQ(r.getLeafContainer().size(), o.getLeafContainer().size());
+      ASSERT_EQ(r.getLeafContainer().getPointCounter(), o.getLeafContainer().getPointCounter());
+    }
+    // PCL's occlusion walk reads keys outside the box as if they were inside: compare with the camera inside.
+    const PointXYZ camera(0, 0, 0);
+    double lo[3], hi[3];
+    ours.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    const bool camera_inside = lo[0] < 0 && lo[1] < 0 && lo[2] < 0 && hi[0] > 0 && hi[1] > 0 && hi[2] > 0;
+    std::size_t occluded = 0;
+    for (std::size_t i = 0; i < cloud->size(); i += 97) {
+      const PointXYZ& p = (*cloud)[i];
+      if (!pcl::isFinite(p)) continue;
+      ASSERT_EQ(ref.getLeafContainerAtPoint(p)->size(), ours.getLeafContainerAtPoint(p)->size());
+      if (camera_inside) {
+        ASSERT_EQ(ref.testForOcclusion(p, camera), ours.testForOcclusion(p, camera)) << i;
+        occluded += ours.testForOcclusion(p, camera);
+      }
+    }
+    if (camera_inside) {
+      EXPECT_GT(occluded, 0u);
+    }
+    pcl::octree::OctreePointCloudAdjacency<PointXYZ>::VoxelAdjacencyList rg;
+    pcl::fot::OctreePointCloudAdjacency<PointXYZ>::VoxelAdjacencyList og;
+    ref.computeVoxelAdjacencyGraph(rg);
+    ours.computeVoxelAdjacencyGraph(og);
+    EXPECT_EQ(boost::num_vertices(rg), boost::num_vertices(og));
+    EXPECT_EQ(boost::num_edges(rg), boost::num_edges(og));
+  }
+}
