@@ -30,9 +30,11 @@ void printHelp(const char* prog) {
       "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside "
       "it\n"
       "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
-      "  -ray_repeats <n>   rounds of the ray tracing, search, algorithm and psi timings (default: 5)\n"
+      "  -ray_repeats <n>   rounds of the ray tracing, search, octree, algorithm and psi timings (default: "
+      "5)\n"
       "  -dmap_repeats <n>  runs of dmap_v at 1024^3 per scan pair, about 10 s each (default: 3)\n"
-      "  -sections <list>   comma-separated subset of: cells,rays,mapping,search,algorithms,psi (default: "
+      "  -sections <list>   comma-separated subset of: cells,rays,mapping,search,octree,algorithms,psi "
+      "(default: "
       "all)\n"
       "  -h                 this help\n\n"
       "Exit codes: 0 done, 1 bad arguments, 2 missing scans or a report that cannot be written.\n",
@@ -41,13 +43,13 @@ void printHelp(const char* prog) {
 
 /** The -sections list: known names, each at most once, at least one. */
 std::set<std::string> sectionList(const std::string& text) {
-  const std::set<std::string> known{"cells", "rays", "mapping", "search", "algorithms", "psi"};
+  const std::set<std::string> known{"cells", "rays", "mapping", "search", "octree", "algorithms", "psi"};
   std::set<std::string> chosen;
   std::stringstream in(text);
   for (std::string name; std::getline(in, name, ',');) {
     if (!known.count(name))
-      throw ToolError(kExitUsage,
-                      "option -sections: '" + name + "' is none of cells,rays,mapping,search,algorithms,psi");
+      throw ToolError(kExitUsage, "option -sections: '" + name +
+                                      "' is none of cells,rays,mapping,search,octree,algorithms,psi");
     if (!chosen.insert(name).second)
       throw ToolError(kExitUsage, "option -sections names '" + name + "' twice");
   }
@@ -76,7 +78,7 @@ int main(int argc, char** argv) {
       return kExitOk;
     }
     std::string data_dir = "../shared/data", out = "doc/benchmarks.md",
-                sections = "cells,rays,mapping,search,algorithms,psi";
+                sections = "cells,rays,mapping,search,octree,algorithms,psi";
     int repeats = 20, ray_repeats = 5, dmap_repeats = 3;
     args.get("-data", data_dir);
     args.get("-out", out);
@@ -114,6 +116,7 @@ int main(int argc, char** argv) {
     if (wanted("rays")) md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
     if (wanted("mapping")) md << fot_bench::benchMultiScan(scans, ray_repeats) << "\n";
     if (wanted("search")) md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
+    if (wanted("octree")) md << fot_bench::benchOctreeFamily(scans, ray_repeats) << "\n";
     if (wanted("algorithms")) md << fot_bench::benchPclAlgorithms(scans, ray_repeats) << "\n";
     if (wanted("psi")) md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, plot) << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());

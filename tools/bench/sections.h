@@ -11,6 +11,8 @@ namespace fot_bench {
 std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats);
 std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats);
 std::string benchSearch(const std::vector<BenchScan>& scans, int repeats);
+/** pcl::fot's OctreePointCloudSearch and OctreePointCloudChangeDetector next to pcl::octree's. */
+std::string benchOctreeFamily(const std::vector<BenchScan>& scans, int repeats);
 /** PCL's features, surface, segmentation and registration algorithms with KdTree and with FastOctTreeSearch.
  */
 std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats);

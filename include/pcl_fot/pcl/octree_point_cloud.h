@@ -299,6 +299,7 @@ class OctreePointCloud {
   void clearLeaves() {
     tree_.clear();
     leaves_.clear();
+    last_.leaf = nullptr;
     phantoms_.clear();
     ++version_;
   }
@@ -363,6 +364,17 @@ class OctreePointCloud {
   FastOctTree tree_;
   // Only when kHoldsLeaves. Mutable as PCL's nodes are: const lookups hand out leaves callers may fill.
   mutable std::unordered_map<LeafId, LeafNode, LeafIdHash> leaves_;
+  /** The leaf the last point went to (a scan's next point often shares it); copies start without it. */
+  struct LastLeaf {
+    LastLeaf() = default;
+    LastLeaf(const LastLeaf&) {}
+    LastLeaf& operator=(const LastLeaf&) {
+      leaf = nullptr;
+      return *this;
+    }
+    LeafId id{};
+    LeafNode* leaf = nullptr;
+  } last_;
   std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
   std::uint64_t version_ = 0;
   /**

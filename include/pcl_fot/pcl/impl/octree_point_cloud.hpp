@@ -259,8 +259,11 @@ OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeafAt(const K
   } else {
     if (max_objs_per_leaf_ == 0) {
       id = LeafId{k, 0};
+      if (last_.leaf && last_.id == id) return last_.leaf;
       const auto [it, inserted] = leaves_.try_emplace(id);
       if (inserted) tree_.setCell(k, CellState::Occupied);
+      last_.id = id;
+      last_.leaf = &it->second;
       return &it->second;
     }
     // The caller marks the cell once the point is in its leaf: a leaf about to split must not see it.
@@ -492,6 +495,7 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::removeLeaf(uind
     LeafId id;
     if (leafOnPath(target, id)) {
       const std::int32_t last = std::int32_t((std::int64_t(1) << id.level) - 1);
+      last_.leaf = nullptr;
       leaves_.erase(id);
       tree_.setBox(id.corner, Key{id.corner.x + last, id.corner.y + last, id.corner.z + last},
                    CellState::Unknown);
@@ -643,6 +647,7 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::deleteTree() {
   bounding_box_defined_ = false;
   tree_.clear();
   leaves_.clear();
+  last_.leaf = nullptr;
   phantoms_.clear();
   ++version_;
 }
