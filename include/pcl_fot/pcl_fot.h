@@ -33,9 +33,9 @@
 #include <pcl_fot/io/octomap.h>
 #include <pcl_fot/io/voxel_export.h>
 
-// The PCL adapters: clouds in, the pcl::octree look-alike, the pcl::search drop-in, registration plugins.
+// The PCL adapters: clouds in, the pcl::octree look-alikes, the pcl::search drop-in, registration plugins.
 #include <pcl_fot/pcl/cloud_insertion.h>
 #include <pcl_fot/pcl/correspondence_rejection_psi.h>
 #include <pcl_fot/pcl/fast_oct_tree_search.h>
-#include <pcl_fot/pcl/octree_point_cloud.h>
+#include <pcl_fot/pcl/octree.h>
 #include <pcl_fot/pcl/transformation_validation_psi.h>
