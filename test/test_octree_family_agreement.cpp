@@ -94,11 +94,24 @@ TEST(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
       pcl::fot::OctreePointCloudPointVector<PointXYZ> ours(res);
       fill(ref, ours, cloud, max_per_leaf);
       expectSameLeaves(ref, ours);
-      // Every iterator walks the same nodes.
-      std::size_t r_nodes = 0, o_nodes = 0;
-      for (auto it = ref.breadth_begin(); it != ref.breadth_end(); ++it) ++r_nodes;
-      for (auto it = ours.breadth_begin(); it != ours.breadth_end(); ++it) ++o_nodes;
-      EXPECT_EQ(r_nodes, o_nodes);
+      // The breadth-first walks visit the same nodes in the same order (leaves of several depths included).
+      auto rb = ref.leaf_breadth_begin();
+      auto ob = ours.leaf_breadth_begin();
+      for (; rb != ref.leaf_breadth_end(); ++rb, ++ob) {
+        ASSERT_TRUE(ob != ours.leaf_breadth_end());
+        ASSERT_EQ(rb.getCurrentOctreeKey(), ob.getCurrentOctreeKey());
+        ASSERT_EQ(rb.getCurrentOctreeDepth(), ob.getCurrentOctreeDepth());
+      }
+      EXPECT_TRUE(ob == ours.leaf_breadth_end());
+      auto rn = ref.breadth_begin();
+      auto on = ours.breadth_begin();
+      for (; rn != ref.breadth_end(); ++rn, ++on) {
+        ASSERT_TRUE(on != ours.breadth_end());
+        ASSERT_EQ(rn.getCurrentOctreeKey(), on.getCurrentOctreeKey());
+        ASSERT_EQ(rn.isLeafNode(), on.isLeafNode());
+        ASSERT_EQ(rn.getNodeConfiguration(), on.getNodeConfiguration());
+      }
+      EXPECT_TRUE(on == ours.breadth_end());
       // Deleting voxels prunes the same way.
       for (std::size_t i = 0; i < cloud->size(); i += 7) {
         if (pcl::isFinite((*cloud)[i]) && insideBox(ref, (*cloud)[i])) {

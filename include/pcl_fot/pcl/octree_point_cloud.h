@@ -2,7 +2,9 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -36,7 +38,7 @@ namespace fot {
  * signature only. Under enableDynamicDepth, leaves stay as shallow as PCL keeps them.
  *
  * Differences from pcl::octree, listed in doc/user_guide.md: there is no serializeTree (see the .fot file
- * format); an iterator lists the nodes when made and does not see later changes; points that are not
+ * format); points that are not
  * finite, or that would grow the box beyond ±2^29 cells, are refused with PCL_ERROR rather than asserting.
  */
 template <typename PointT, typename LeafContainerT = OctreeContainerPointIndices,
@@ -62,29 +64,51 @@ class OctreePointCloud {
   /** Whether leaves hold containers; the occupancy octree's leaves are the tree's cells. */
   static constexpr bool kHoldsLeaves = !std::is_same<LeafContainerT, OctreeContainerEmpty>::value;
 
+  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
+  struct LeafId {
+    Key corner;
+    std::uint32_t level;
+    bool operator==(const LeafId& o) const {
+      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
+    }
+  };
+  struct LeafIdHash {
+    std::size_t operator()(const LeafId& id) const {
+      std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) *
+           0x165667B19E3779F9ULL;
+      return std::size_t(h ^ (h >> 29));
+    }
+  };
+  /** PCL's branches: each one's cube, with the bit pattern of its children (bit i: child i exists). */
+  using BranchIndex = std::unordered_map<LeafId, std::uint8_t, LeafIdHash>;
+
   /** One node of the octree pcl::octree would build. */
   struct Node {
-    octree::OctreeKey key;
+    octree::OctreeKey key;  // as in PCL, only the bits of its depth
     uindex_t depth;
-    std::uint8_t children;  // PCL's child bit pattern
+    std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf
     bool leaf;
   };
 
  public:
   /**
-   * Visits pcl::octree's nodes, branches (the root included) and leaves, in the order of the PCL iterator
-   * it stands for. The nodes are listed when the iterator is made: later changes to the octree are not seen.
+   * Walks pcl::octree's nodes, branches (the root included) and leaves, in the order of the PCL iterator
+   * it stands for: depth first (children in PCL's order) or breadth first, every node or only leaves or
+   * one depth, down to a maximum depth. It walks the octree's branches as they were when it was made;
+   * adding or deleting points invalidates it, as in PCL.
    */
   class NodeIterator {
    public:
     NodeIterator() = default;
     NodeIterator& operator++() {
-      ++at_;
+      advance();
       return *this;
     }
     NodeIterator operator++(int) {
       NodeIterator before = *this;
-      ++at_;
+      advance();
       return before;
     }
     /**
@@ -93,38 +117,45 @@ class OctreePointCloud {
      */
     bool operator==(const NodeIterator& o) const {
       if (tree_ != o.tree_) return false;
-      if (atEnd() || o.atEnd()) return atEnd() && o.atEnd();
-      return max_depth_ == o.max_depth_ && node().key == o.node().key;
+      if (at_end_ || o.at_end_) return at_end_ && o.at_end_;
+      return max_depth_ == o.max_depth_ && node_.key == o.node_.key;
     }
     bool operator!=(const NodeIterator& o) const { return !(*this == o); }
     /** As in PCL, a branch's key holds only the bits of its depth. */
-    const octree::OctreeKey& getCurrentOctreeKey() const { return node().key; }
-    uindex_t getCurrentOctreeDepth() const { return node().depth; }
-    bool isLeafNode() const { return node().leaf; }
-    bool isBranchNode() const { return !node().leaf; }
+    const octree::OctreeKey& getCurrentOctreeKey() const { return node_.key; }
+    uindex_t getCurrentOctreeDepth() const { return node_.depth; }
+    bool isLeafNode() const { return node_.leaf; }
+    bool isBranchNode() const { return !node_.leaf; }
     /** PCL's bit pattern of a branch's children (bit i: child i exists); 0 for a leaf. */
-    char getNodeConfiguration() const { return static_cast<char>(node().children); }
+    char getNodeConfiguration() const { return static_cast<char>(node_.children); }
     /**
      * The leaf's node from the octree's table; for a branch, one node of type BRANCH_NODE that all
      * branches share (branches hold nothing here).
      */
     OctreeNode* getCurrentOctreeNode() const;
-    /** The leaf's container; only on a leaf of an octree that holds containers. */
-    LeafContainerT& getLeafContainer() const {
-      return tree_->leafAt(node().key, node().depth)->getContainer();
-    }
+    /** The leaf's container; only on a leaf. */
+    LeafContainerT& getLeafContainer() const { return tree_->leafAt(node_.key, node_.depth)->getContainer(); }
 
    private:
     friend class OctreePointCloud;
-    NodeIterator(const OctreePointCloud* tree, uindex_t max_depth,
-                 std::shared_ptr<const std::vector<Node>> nodes)
-        : tree_(tree), max_depth_(max_depth), nodes_(std::move(nodes)) {}
-    bool atEnd() const { return !nodes_ || at_ >= nodes_->size(); }
-    const Node& node() const { return (*nodes_)[at_]; }
+    /** Which nodes the walk stops at. */
+    enum class Stops : std::uint8_t { All, Leaves, OneDepth };
+    NodeIterator(const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth);
+    /** On to the next node the walk stops at, or to the end. */
+    void advance();
+    /** The node at this key and depth: a branch of the index, else a leaf. */
+    Node nodeAt(const octree::OctreeKey& key, uindex_t depth) const;
+
     const OctreePointCloud* tree_ = nullptr;
+    std::shared_ptr<const BranchIndex> branches_;
+    bool depth_first_ = true;
+    Stops stops_ = Stops::All;
     uindex_t max_depth_ = 0;
-    std::shared_ptr<const std::vector<Node>> nodes_;
-    std::size_t at_ = 0;
+    Node node_{};
+    bool at_end_ = true;
+    // The nodes still to visit: depth first takes the last (children pushed last to first), breadth first
+    // the first.
+    std::deque<Node> pending_;
   };
   using Iterator = NodeIterator;
   using ConstIterator = NodeIterator;
@@ -216,24 +247,34 @@ class OctreePointCloud {
   void getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const;
 
   /** Depth-first, children in index order; max_depth_arg 0 means the full depth. */
-  NodeIterator begin(uindex_t max_depth_arg = 0u) const;
-  NodeIterator end() const { return NodeIterator(this, 0, nullptr); }
+  NodeIterator begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, true, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+  }
+  NodeIterator end() const {
+    NodeIterator at_end;
+    at_end.tree_ = this;
+    return at_end;
+  }
   NodeIterator cbegin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
   NodeIterator cend() const { return end(); }
   NodeIterator depth_begin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
   NodeIterator depth_end() const { return end(); }
   /** Level by level, from the root down. */
-  NodeIterator breadth_begin(uindex_t max_depth_arg = 0u) const;
+  NodeIterator breadth_begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, false, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+  }
   NodeIterator breadth_end() const { return end(); }
   /** The nodes at one depth, in breadth-first order; none, with PCL_WARN, deeper than the tree. */
   NodeIterator fixed_depth_begin(uindex_t fixed_depth_arg = 0u) const;
   NodeIterator fixed_depth_end() const { return end(); }
-  /** The leaves; none when max_depth_arg stops above them. */
-  NodeIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const;
+  /** The leaves, depth first; those deeper than max_depth_arg are left out. */
+  NodeIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, true, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
+  }
   NodeIterator leaf_depth_end() const { return end(); }
-  /** Every leaf lies at the full depth, so breadth-first order is depth-first order, as in pcl::octree. */
+  /** The leaves, level by level (they differ from depth first only under dynamic depth). */
   NodeIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
-    return leaf_depth_begin(max_depth_arg);
+    return NodeIterator(this, false, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
   }
   NodeIterator leaf_breadth_end() const { return end(); }
 
@@ -303,35 +344,17 @@ class OctreePointCloud {
     phantoms_.clear();
     ++version_;
   }
-  /** Whether the node at this depth and key exists in the octree PCL would build. */
-  bool nodeExists(const octree::OctreeKey& key, uindex_t depth) const;
-  /** The occupied voxels' PCL keys in pcl::octree's depth-first order. */
-  std::vector<octree::OctreeKey> sortedLeafKeys() const;
-  /** The leaves as (key, depth), keys at full depth (each cube's first voxel), in depth-first order. */
-  std::vector<std::pair<octree::OctreeKey, uindex_t>> sortedLeaves() const;
+  /**
+   * The leaf pcl::octree's approxNearestSearch descends to: at each depth, the existing child whose centre
+   * lies nearest to the point. nullptr if the descent meets an empty old root (where PCL asserts).
+   */
+  const LeafNode* approxLeaf(const PointT& point) const;
 
   PointCloudConstPtr input_;
   IndicesConstPtr indices_;
   uindex_t depth_ = 0;
 
  private:
-  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
-  struct LeafId {
-    Key corner;
-    std::uint32_t level;
-    bool operator==(const LeafId& o) const {
-      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
-    }
-  };
-  struct LeafIdHash {
-    std::size_t operator()(const LeafId& id) const {
-      std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
-      h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
-      h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) *
-           0x165667B19E3779F9ULL;
-      return std::size_t(h ^ (h >> 29));
-    }
-  };
   /** The cube at this level holding the tree key k, aligned on PCL's grid. */
   LeafId cubeOf(const Key& k, std::uint32_t level) const;
   /** Whether the cube holds an occupied cell or an empty old root. */
@@ -350,11 +373,8 @@ class OctreePointCloud {
   /** PCL's expandLeafNode: the leaf becomes a branch, its points go to new leaves one level down. */
   void expandLeaf(const LeafId& id);
   void getKeyBitSize();
-  /** The nodes pcl::octree would hold for these voxels, in its depth-first order, down to max_depth (0: all).
-   */
-  std::vector<Node> depthFirstNodes(uindex_t max_depth) const;
-  /** An iterator's maximum depth, as PCL's keeps it: the tree's depth for 0. */
-  uindex_t iteratorDepth(uindex_t max_depth) const { return max_depth == 0 ? depth_ : max_depth; }
+  /** PCL's branches, built from the leaves at the first walk after a change. */
+  std::shared_ptr<const BranchIndex> branchIndex() const;
 
   double epsilon_ = 0.0;
   double resolution_;
@@ -377,6 +397,20 @@ class OctreePointCloud {
   } last_;
   std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
   std::uint64_t version_ = 0;
+  /** The branch index of the last walk; a copy of the octree starts without it. */
+  struct BranchCache {
+    BranchCache() = default;
+    BranchCache(const BranchCache&) {}
+    BranchCache& operator=(const BranchCache&) {
+      std::lock_guard<std::mutex> lock(mutex);
+      index.reset();
+      return *this;
+    }
+    std::mutex mutex;
+    std::shared_ptr<const BranchIndex> index;
+    std::uint64_t version = 0;
+  };
+  mutable BranchCache branch_cache_;
   /**
    * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
    * only a deletion beneath it removes. These nested cubes (tree keys) keep getBranchCount exact.

@@ -37,12 +37,12 @@ class OctreePointCloudChangeDetector : public OctreePointCloud<PointT, LeafConta
    */
   uindex_t getPointIndicesFromNewVoxels(Indices& indicesVector_arg,
                                         const uindex_t minPointsPerLeaf_arg = 0) const {
-    for (const auto& [key, depth] : this->sortedLeaves()) {
-      if (previous_.getCell(this->pclKeyToTreeKey(key)) == CellState::Occupied) continue;
-      const uindex_t level = this->depth_ - depth;
-      const LeafContainerT& leaf =
-          this->leafAt(octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), depth)
-              ->getContainer();
+    for (auto it = this->leaf_depth_begin(); it != this->leaf_depth_end(); ++it) {
+      const octree::OctreeKey& key = it.getCurrentOctreeKey();
+      const uindex_t level = this->depth_ - it.getCurrentOctreeDepth();
+      const octree::OctreeKey first_voxel(key.x << level, key.y << level, key.z << level);
+      if (previous_.getCell(this->pclKeyToTreeKey(first_voxel)) == CellState::Occupied) continue;
+      const LeafContainerT& leaf = it.getLeafContainer();
       if (static_cast<uindex_t>(leaf.getSize()) >= minPointsPerLeaf_arg)
         leaf.getPointIndices(indicesVector_arg);
     }

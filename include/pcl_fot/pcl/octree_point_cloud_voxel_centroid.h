@@ -39,12 +39,9 @@ class OctreePointCloudVoxelCentroid : public OctreePointCloud<PointT, LeafContai
   uindex_t getVoxelCentroids(AlignedPointTVector& voxel_centroid_list_arg) const {
     voxel_centroid_list_arg.clear();
     voxel_centroid_list_arg.reserve(this->getLeafCount());
-    for (const auto& [key, depth] : this->sortedLeaves()) {
-      const uindex_t level = this->depth_ - depth;
+    for (auto it = this->leaf_depth_begin(); it != this->leaf_depth_end(); ++it) {
       PointT centroid;
-      this->leafAt(octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), depth)
-          ->getContainer()
-          .getCentroid(centroid);
+      it.getLeafContainer().getCentroid(centroid);
       voxel_centroid_list_arg.push_back(centroid);
     }
     return static_cast<uindex_t>(voxel_centroid_list_arg.size());

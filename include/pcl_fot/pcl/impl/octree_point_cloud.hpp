@@ -12,7 +12,6 @@
 #include <pcl/common/point_tests.h>
 #include <pcl/console/print.h>
 
-#include <pcl_fot/detail/bits.h>
 #include <pcl_fot/mapping/ray_traversal.h>
 #include <pcl_fot/pcl/octree_point_cloud.h>
 #include <pcl_fot/tree/accessor.h>
@@ -23,27 +22,6 @@ namespace detail {
 
 /** The deepest box the adapter follows PCL to: 2^29 cells per axis keeps tree keys in range. */
 constexpr uindex_t kMaxPclDepth = 29;
-
-/** Moves bit i of v to bit 3i, for v below 2^21. */
-inline std::uint64_t spreadBits3(std::uint64_t v) {
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  return (v | v << 2) & 0x1249249249249249ULL;
-}
-
-/**
- * A key's place in pcl::octree's depth-first order, where the child index at each level is x·4 + y·2 + z:
- * the key's bits interleaved, x above y above z.
- */
-struct PclOrderCode {
-  std::uint64_t high, low;  // bits 28..14 of each axis, then bits 13..0
-  explicit PclOrderCode(const octree::OctreeKey& k)
-      : high(spreadBits3(k.x >> 14) << 2 | spreadBits3(k.y >> 14) << 1 | spreadBits3(k.z >> 14)),
-        low(spreadBits3(k.x & 0x3fff) << 2 | spreadBits3(k.y & 0x3fff) << 1 | spreadBits3(k.z & 0x3fff)) {}
-  bool operator<(const PclOrderCode& o) const { return high < o.high || (high == o.high && low < o.low); }
-};
 
 }  // namespace detail
 
@@ -108,7 +86,7 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::voxelCenter(con
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 OctreeNode* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator::getCurrentOctreeNode()
     const {
-  if (node().leaf) return tree_->leafAt(node().key, node().depth);
+  if (node_.leaf) return tree_->leafAt(node_.key, node_.depth);
   static BranchNode branch;  // branches hold nothing here; one node tells their type
   return &branch;
 }
@@ -300,14 +278,36 @@ OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::leafAt(const octree:
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::nodeExists(const octree::OctreeKey& key,
-                                                                            uindex_t depth) const {
-  if (depth == 0) return true;
-  const std::uint32_t level = depth_ - depth;
-  const Key corner = pclKeyToTreeKey(octree::OctreeKey(key.x << level, key.y << level, key.z << level));
-  if constexpr (kHoldsLeaves)
-    if (leaves_.count(LeafId{corner, level})) return true;
-  return cubeHasContent(LeafId{corner, level});
+const typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::approxLeaf(const PointT& point) const {
+  const auto branches = branchIndex();
+  octree::OctreeKey key(0, 0, 0);
+  std::uint8_t children = branches->at(cubeOf(pclKeyToTreeKey(key), depth_));
+  for (uindex_t depth = 1; depth <= depth_; ++depth) {
+    double nearest = std::numeric_limits<double>::max();
+    octree::OctreeKey nearest_key;
+    for (unsigned c = 0; c < 8; ++c) {
+      if (!(children >> c & 1u)) continue;
+      const octree::OctreeKey child(key.x << 1 | (c >> 2 & 1u), key.y << 1 | (c >> 1 & 1u),
+                                    key.z << 1 | (c & 1u));
+      PointT center;
+      voxelCenter(child, depth, center);
+      const double d = (center.getVector3fMap() - point.getVector3fMap()).squaredNorm();  // in float, as PCL
+      if (d >= nearest) continue;
+      nearest = d;
+      nearest_key = child;
+    }
+    if (nearest == std::numeric_limits<double>::max()) return nullptr;  // an empty old root: PCL asserts
+    const std::uint32_t level = depth_ - depth;
+    const auto it =
+        branches->find(LeafId{pclKeyToTreeKey(octree::OctreeKey(
+                                  nearest_key.x << level, nearest_key.y << level, nearest_key.z << level)),
+                              level});
+    if (it == branches->end()) return leafAt(nearest_key, depth);
+    key = nearest_key;
+    children = it->second;
+  }
+  return nullptr;
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
@@ -536,109 +536,125 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::deleteVoxelAtPo
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-std::vector<std::pair<octree::OctreeKey, uindex_t>>
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::sortedLeaves() const {
-  std::vector<std::pair<detail::PclOrderCode, std::pair<octree::OctreeKey, uindex_t>>> coded;
-  coded.reserve(getLeafCount());
-  const auto add = [&](const Key& k, std::uint32_t level) {
-    const octree::OctreeKey key(uindex_t(k.x - offset_[0]), uindex_t(k.y - offset_[1]),
-                                uindex_t(k.z - offset_[2]));
-    coded.emplace_back(detail::PclOrderCode(key), std::make_pair(key, depth_ - level));
-  };
-  if constexpr (kHoldsLeaves)
-    for (const auto& leaf : leaves_) add(leaf.first.corner, leaf.first.level);
-  else
-    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { add(k, 0); });
-  std::sort(coded.begin(), coded.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<std::pair<octree::OctreeKey, uindex_t>> leaves;
-  leaves.reserve(coded.size());
-  for (const auto& c : coded) leaves.push_back(c.second);
-  return leaves;
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-std::vector<octree::OctreeKey> OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::sortedLeafKeys()
-    const {
-  std::vector<octree::OctreeKey> keys;
-  for (const auto& leaf : sortedLeaves()) keys.push_back(leaf.first);
-  return keys;
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getOccupiedVoxelCenters(
     AlignedPointTVector& voxel_center_list_arg) const {
   voxel_center_list_arg.clear();
-  for (const auto& [key, depth] : sortedLeaves()) {
+  for (auto it = leaf_depth_begin(); it != leaf_depth_end(); ++it) {
     // As PCL: a shallow leaf's key, of its own depth, is taken as a voxel's.
-    const uindex_t level = depth_ - depth;
     PointT center;
-    pclKeyToCenter(octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), center);
+    pclKeyToCenter(it.getCurrentOctreeKey(), center);
     voxel_center_list_arg.push_back(center);
   }
   return static_cast<uindex_t>(voxel_center_list_arg.size());
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-std::vector<typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::Node>
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::depthFirstNodes(uindex_t max_depth) const {
-  if (max_depth == 0 || max_depth > depth_) max_depth = depth_;
-  // The nodes come from markers, in depth-first order: each voxel, and each empty old root that PCL keeps.
-  // Each marker brings the ancestors the previous markers did not.
-  struct Marker {
-    octree::OctreeKey corner;  // the cube's first voxel
-    uindex_t depth;
-    bool leaf;
-  };
-  std::vector<Marker> markers;
-  const auto leaves = sortedLeaves();
-  markers.reserve(leaves.size() + phantoms_.size());
-  for (const auto& [key, depth] : leaves) markers.push_back({key, depth, true});
-  for (const Phantom& ph : phantoms_)
-    markers.push_back({octree::OctreeKey(uindex_t(ph.min.x - offset_[0]), uindex_t(ph.min.y - offset_[1]),
-                                         uindex_t(ph.min.z - offset_[2])),
-                       depth_ - ph.level, false});
-  // The voxels are in order; the old roots merge in, a cube before what it contains from the same corner.
-  const auto before = [](const Marker& a, const Marker& b) {
-    const detail::PclOrderCode ca(a.corner), cb(b.corner);
-    return ca < cb || (!(cb < ca) && a.depth < b.depth);
-  };
-  const auto voxels_end = markers.begin() + std::ptrdiff_t(leaves.size());
-  std::sort(voxels_end, markers.end(), before);
-  std::inplace_merge(markers.begin(), voxels_end, markers.end(), before);
-
-  std::vector<Node> nodes{{octree::OctreeKey(0, 0, 0), 0, 0, false}};
-  nodes.reserve(2 * markers.size() + 1);
-  std::vector<std::size_t> path{0};        // the indices of the last node listed at each depth
-  octree::OctreeKey path_corner(0, 0, 0);  // a voxel in the deepest node on the path
-  for (const Marker& m : markers) {
-    // The path holds m's ancestors down to where their corners part.
-    const std::uint32_t parted =
-        (m.corner.x ^ path_corner.x) | (m.corner.y ^ path_corner.y) | (m.corner.z ^ path_corner.z);
-    const uindex_t shared = depth_ - (parted == 0 ? 0u : 1u + uindex_t(detail::highestBit(parted)));
-    const uindex_t known = std::min({uindex_t(path.size() - 1), shared, m.depth});
-    if (known == m.depth) continue;
-    path.resize(known + 1);
-    for (uindex_t depth = known + 1; depth <= m.depth; ++depth) {
-      const uindex_t shift = depth_ - depth;
-      const octree::OctreeKey key(m.corner.x >> shift, m.corner.y >> shift, m.corner.z >> shift);
-      nodes[path.back()].children |= std::uint8_t(1u << ((key.x & 1) << 2 | (key.y & 1) << 1 | (key.z & 1)));
-      path.push_back(nodes.size());
-      nodes.push_back({key, depth, 0, depth == m.depth && m.leaf});
+std::shared_ptr<const typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::BranchIndex>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::branchIndex() const {
+  std::lock_guard<std::mutex> lock(branch_cache_.mutex);
+  if (branch_cache_.index && branch_cache_.version == version_) return branch_cache_.index;
+  auto index = std::make_shared<BranchIndex>();
+  const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
+  index->emplace(root, 0);
+  // Each node marks itself in its parent; a parent met before already has its ancestors marked.
+  const auto addNode = [&](LeafId node) {
+    for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
+      const LeafId parent = cubeOf(node.corner, level);
+      const auto bit = [&](std::int32_t v, std::int32_t offset) {
+        return (std::uint32_t(v - offset) >> node.level) & 1u;
+      };
+      const unsigned child = bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
+                             bit(node.corner.z, offset_[2]);
+      const auto [it, inserted] = index->try_emplace(parent, 0);
+      it->second |= std::uint8_t(1u << child);
+      if (!inserted) return;
+      node = parent;
     }
-    path_corner = m.corner;
+  };
+  if constexpr (kHoldsLeaves)
+    for (const auto& leaf : leaves_) addNode(leaf.first);
+  else
+    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { addNode(LeafId{k, 0}); });
+  // PCL keeps the empty old roots of a box grown before any point as branches.
+  for (const Phantom& ph : phantoms_) {
+    const LeafId cube{ph.min, std::uint32_t(ph.level)};
+    index->try_emplace(cube, 0);
+    addNode(cube);
   }
-  // Cut below max_depth only now: the nodes there keep their children's bits, as in PCL.
-  if (max_depth < depth_)
-    nodes.erase(
-        std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth > max_depth; }),
-        nodes.end());
-  return nodes;
+  branch_cache_.index = std::move(index);
+  branch_cache_.version = version_;
+  return branch_cache_.index;
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 std::size_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getBranchCount() const {
-  const std::vector<Node> nodes = depthFirstNodes(0);
-  return std::size_t(std::count_if(nodes.begin(), nodes.end(), [](const Node& n) { return !n.leaf; }));
+  return branchIndex()->size();
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator::NodeIterator(
+    const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth)
+    : tree_(tree),
+      branches_(tree->branchIndex()),
+      depth_first_(depth_first),
+      stops_(stops),
+      max_depth_(max_depth) {
+  pending_.push_back(nodeAt(octree::OctreeKey(0, 0, 0), 0));
+  at_end_ = false;
+  advance();
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::Node
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator::nodeAt(const octree::OctreeKey& key,
+                                                                                 uindex_t depth) const {
+  const std::uint32_t level = tree_->depth_ - depth;
+  const LeafId cube{tree_->pclKeyToTreeKey(octree::OctreeKey(key.x << level, key.y << level, key.z << level)),
+                    level};
+  const auto it = branches_->find(cube);
+  return it != branches_->end() ? Node{key, depth, it->second, false} : Node{key, depth, 0, true};
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator::advance() {
+  const uindex_t limit = std::min(max_depth_, tree_->depth_);
+  while (!pending_.empty()) {
+    if (depth_first_) {
+      node_ = pending_.back();
+      pending_.pop_back();
+    } else {
+      node_ = pending_.front();
+      pending_.pop_front();
+    }
+    if (!node_.leaf && node_.depth < limit) {
+      // Children in PCL's order: depth first pushes them last to first, so the first comes out first.
+      for (unsigned i = 0; i < 8; ++i) {
+        const unsigned c = depth_first_ ? 7 - i : i;
+        if (!(node_.children >> c & 1u)) continue;
+        const octree::OctreeKey& k = node_.key;
+        pending_.push_back(
+            nodeAt(octree::OctreeKey(k.x << 1 | (c >> 2 & 1u), k.y << 1 | (c >> 1 & 1u), k.z << 1 | (c & 1u)),
+                   node_.depth + 1));
+      }
+    }
+    if (stops_ == Stops::All || (stops_ == Stops::Leaves && node_.leaf) ||
+        (stops_ == Stops::OneDepth && node_.depth == max_depth_))
+      return;
+  }
+  at_end_ = true;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::fixed_depth_begin(
+    uindex_t fixed_depth_arg) const {
+  if (fixed_depth_arg > depth_) {
+    PCL_WARN(
+        "[pcl::fot::OctreePointCloud::fixed_depth_begin] Depth %u is deeper than the octree (depth %u).\n",
+        fixed_depth_arg, depth_);
+    return end();
+  }
+  return NodeIterator(this, false, NodeIterator::Stops::OneDepth, fixed_depth_arg);
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
@@ -744,56 +760,6 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getVoxelBounds(
     min_pt(a) = static_cast<float>(static_cast<double>(k[a]) * side + min_[a]);
     max_pt(a) = static_cast<float>(static_cast<double>(k[a] + 1) * side + min_[a]);
   }
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::begin(uindex_t max_depth_arg) const {
-  return NodeIterator(this, iteratorDepth(max_depth_arg),
-                      std::make_shared<const std::vector<Node>>(depthFirstNodes(max_depth_arg)));
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::breadth_begin(uindex_t max_depth_arg) const {
-  std::vector<Node> nodes = depthFirstNodes(max_depth_arg);
-  // Depth-first order restricted to one depth is that depth's breadth-first order.
-  std::stable_sort(nodes.begin(), nodes.end(),
-                   [](const Node& a, const Node& b) { return a.depth < b.depth; });
-  return NodeIterator(this, iteratorDepth(max_depth_arg),
-                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::fixed_depth_begin(
-    uindex_t fixed_depth_arg) const {
-  if (fixed_depth_arg > depth_) {
-    PCL_WARN(
-        "[pcl::fot::OctreePointCloud::fixed_depth_begin] Depth %u is deeper than the octree (depth %u).\n",
-        fixed_depth_arg, depth_);
-    return end();
-  }
-  std::vector<Node> nodes = depthFirstNodes(fixed_depth_arg);
-  nodes.erase(
-      std::remove_if(nodes.begin(), nodes.end(), [&](const Node& n) { return n.depth != fixed_depth_arg; }),
-      nodes.end());
-  return NodeIterator(this, iteratorDepth(fixed_depth_arg),
-                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
-}
-
-template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::NodeIterator
-OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::leaf_depth_begin(uindex_t max_depth_arg) const {
-  std::vector<Node> nodes;
-  nodes.reserve(getLeafCount());
-  for (const auto& [key, depth] : sortedLeaves())
-    if (max_depth_arg == 0 || depth <= max_depth_arg) {
-      const uindex_t level = depth_ - depth;  // as in PCL, a node's key holds only the bits of its depth
-      nodes.push_back({octree::OctreeKey(key.x >> level, key.y >> level, key.z >> level), depth, 0, true});
-    }
-  return NodeIterator(this, iteratorDepth(max_depth_arg),
-                      std::make_shared<const std::vector<Node>>(std::move(nodes)));
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>

@@ -15,6 +15,27 @@ namespace pcl {
 namespace fot {
 namespace detail {
 
+/** Moves bit i of v to bit 3i, for v below 2^21. */
+inline std::uint64_t spreadBits3(std::uint64_t v) {
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  return (v | v << 2) & 0x1249249249249249ULL;
+}
+
+/**
+ * A key's place in pcl::octree's depth-first order, where the child index at each level is x·4 + y·2 + z:
+ * the key's bits interleaved, x above y above z.
+ */
+struct PclOrderCode {
+  std::uint64_t high, low;  // bits 28..14 of each axis, then bits 13..0
+  explicit PclOrderCode(const octree::OctreeKey& k)
+      : high(spreadBits3(k.x >> 14) << 2 | spreadBits3(k.y >> 14) << 1 | spreadBits3(k.z >> 14)),
+        low(spreadBits3(k.x & 0x3fff) << 2 | spreadBits3(k.y & 0x3fff) << 1 | spreadBits3(k.z & 0x3fff)) {}
+  bool operator<(const PclOrderCode& o) const { return high < o.high || (high == o.high && low < o.low); }
+};
+
 /** pcl::octree's point distance, as it computes it (Eigen's squaredNorm sums x² + (y² + z²)). */
 template <typename PointT>
 float octreeSquaredDistance(const PointT& a, const PointT& b) {
@@ -161,38 +182,16 @@ template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 void OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::approxNearestSearch(
     const PointT& p_q, index_t& result_index, float& sqr_distance) const {
   if (!canSearch(p_q, "approxNearestSearch")) return;
-  // PCL's descent: at each depth, into the existing child whose centre lies nearest.
-  octree::OctreeKey key(0, 0, 0);
-  for (uindex_t depth = 1; depth <= this->depth_; ++depth) {
-    double nearest = std::numeric_limits<double>::max();
-    octree::OctreeKey nearest_key;
-    bool found = false;
-    for (unsigned child = 0; child < 8; ++child) {
-      const octree::OctreeKey child_key((key.x << 1) | (child >> 2 & 1), (key.y << 1) | (child >> 1 & 1),
-                                        (key.z << 1) | (child & 1));
-      if (!this->nodeExists(child_key, depth)) continue;
-      PointT center;
-      this->voxelCenter(child_key, depth, center);
-      const double d = detail::octreeSquaredDistance(center, p_q);
-      if (d >= nearest) continue;
-      nearest = d;
-      nearest_key = child_key;
-      found = true;
-    }
-    if (!found) return;  // an empty old root: PCL asserts here
-    if (const LeafNode* leaf = this->leafAt(nearest_key, depth)) {
-      Indices points;
-      leaf->getContainer().getPointIndices(points);
-      float smallest = std::numeric_limits<float>::max();
-      for (const index_t i : points) {
-        const float d = detail::octreeSquaredDistance((*this->input_)[i], p_q);
-        if (d >= smallest) continue;
-        result_index = i;
-        smallest = sqr_distance = d;
-      }
-      return;
-    }
-    key = nearest_key;
+  const LeafNode* leaf = this->approxLeaf(p_q);
+  if (!leaf) return;
+  Indices points;
+  leaf->getContainer().getPointIndices(points);
+  float smallest = std::numeric_limits<float>::max();
+  for (const index_t i : points) {
+    const float d = detail::octreeSquaredDistance((*this->input_)[i], p_q);
+    if (d >= smallest) continue;
+    result_index = i;
+    smallest = sqr_distance = d;
   }
 }
 
