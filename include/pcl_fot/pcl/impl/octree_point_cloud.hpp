@@ -220,7 +220,7 @@ OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeaf(const oct
   const Key k = pclKeyToTreeKey(key);
   LeafId id;
   LeafNode* leaf = createLeafAt(k, id);
-  tree_.setCell(k, CellState::Occupied);
+  if (max_objs_per_leaf_ != 0) tree_.setCell(k, CellState::Occupied);  // see createLeafAt
   return leaf;
 }
 
