@@ -38,8 +38,8 @@ namespace fot {
  * signature only. Under enableDynamicDepth, leaves stay as shallow as PCL keeps them.
  *
  * Differences from pcl::octree, listed in doc/user_guide.md: there is no serializeTree (see the .fot file
- * format); points that are not
- * finite, or that would grow the box beyond ±2^29 cells, are refused with PCL_ERROR rather than asserting.
+ * format); points that are not finite, or that would grow the box beyond ±2^29 cells, are refused with
+ * PCL_ERROR rather than asserting.
  */
 template <typename PointT, typename LeafContainerT = OctreeContainerPointIndices,
           typename BranchContainerT = OctreeContainerEmpty>
