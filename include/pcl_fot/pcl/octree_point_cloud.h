@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
-#include <mutex>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -17,6 +16,7 @@
 #include <pcl/types.h>
 #include <Eigen/Core>
 
+#include <pcl_fot/detail/version_cache.h>
 #include <pcl_fot/pcl/octree_containers.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
@@ -375,6 +375,7 @@ class OctreePointCloud {
   void getKeyBitSize();
   /** PCL's branches, built from the leaves at the first walk after a change. */
   std::shared_ptr<const BranchIndex> branchIndex() const;
+  std::shared_ptr<const BranchIndex> buildBranchIndex() const;
 
   double epsilon_ = 0.0;
   double resolution_;
@@ -397,20 +398,7 @@ class OctreePointCloud {
   } last_;
   std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
   std::uint64_t version_ = 0;
-  /** The branch index of the last walk; a copy of the octree starts without it. */
-  struct BranchCache {
-    BranchCache() = default;
-    BranchCache(const BranchCache&) {}
-    BranchCache& operator=(const BranchCache&) {
-      std::lock_guard<std::mutex> lock(mutex);
-      index.reset();
-      return *this;
-    }
-    std::mutex mutex;
-    std::shared_ptr<const BranchIndex> index;
-    std::uint64_t version = 0;
-  };
-  mutable BranchCache branch_cache_;
+  mutable detail::VersionCache<BranchIndex> branch_cache_;  // the branch index of the last walk
   /**
    * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
    * only a deletion beneath it removes. These nested cubes (tree keys) keep getBranchCount exact.

@@ -2,9 +2,9 @@
 
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <vector>
 
+#include <pcl_fot/detail/version_cache.h>
 #include <pcl_fot/pcl/octree_point_cloud.h>
 #include <pcl_fot/search/point_index.h>
 
@@ -92,20 +92,7 @@ class OctreePointCloudSearch : public OctreePointCloud<PointT, LeafContainerT, B
   /** Whether a query can be answered: the point finite, the octree holding points. */
   bool canSearch(const PointT& p_q, const char* caller) const;
 
-  /** A copy starts without an index; it builds its own. */
-  struct IndexCache {
-    IndexCache() = default;
-    IndexCache(const IndexCache&) {}
-    IndexCache& operator=(const IndexCache&) {
-      std::lock_guard<std::mutex> lock(mutex);
-      index.reset();
-      return *this;
-    }
-    std::mutex mutex;
-    std::shared_ptr<const PointIndex> index;
-    std::uint64_t version = 0;
-  };
-  mutable IndexCache cache_;
+  mutable detail::VersionCache<PointIndex> cache_;  // the index of the octree's points
 };
 
 }  // namespace fot

@@ -551,8 +551,12 @@ uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getOccupied
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 std::shared_ptr<const typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::BranchIndex>
 OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::branchIndex() const {
-  std::lock_guard<std::mutex> lock(branch_cache_.mutex);
-  if (branch_cache_.index && branch_cache_.version == version_) return branch_cache_.index;
+  return branch_cache_.get(version_, [&] { return buildBranchIndex(); });
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+std::shared_ptr<const typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::BranchIndex>
+OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::buildBranchIndex() const {
   auto index = std::make_shared<BranchIndex>();
   const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
   index->emplace(root, 0);
@@ -581,9 +585,7 @@ OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::branchIndex() const 
     index->try_emplace(cube, 0);
     addNode(cube);
   }
-  branch_cache_.index = std::move(index);
-  branch_cache_.version = version_;
-  return branch_cache_.index;
+  return index;
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>

@@ -47,20 +47,18 @@ float octreeSquaredDistance(const PointT& a, const PointT& b) {
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 std::shared_ptr<const PointIndex>
 OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::pointIndex() const {
-  std::lock_guard<std::mutex> lock(cache_.mutex);
-  if (cache_.index && cache_.version == this->version()) return cache_.index;
-  Indices points;
-  this->forEachLeaf([&](const LeafContainerT& leaf) { leaf.getPointIndices(points); });
-  // Indices beyond the cloud (it was swapped for a smaller one) are left out, not read.
-  const auto size = static_cast<index_t>(this->input_->size());
-  points.erase(std::remove_if(points.begin(), points.end(), [&](index_t i) { return i < 0 || i >= size; }),
-               points.end());
-  auto index = std::make_shared<PointIndex>();
-  if (!this->input_->empty())
-    index->build(&(*this->input_)[0].x, this->input_->size(), sizeof(PointT), points.data(), points.size());
-  cache_.index = std::move(index);
-  cache_.version = this->version();
-  return cache_.index;
+  return cache_.get(this->version(), [&] {
+    Indices points;
+    this->forEachLeaf([&](const LeafContainerT& leaf) { leaf.getPointIndices(points); });
+    // Indices beyond the cloud (it was swapped for a smaller one) are left out, not read.
+    const auto size = static_cast<index_t>(this->input_->size());
+    points.erase(std::remove_if(points.begin(), points.end(), [&](index_t i) { return i < 0 || i >= size; }),
+                 points.end());
+    auto index = std::make_shared<PointIndex>();
+    if (!this->input_->empty())
+      index->build(&(*this->input_)[0].x, this->input_->size(), sizeof(PointT), points.data(), points.size());
+    return std::shared_ptr<const PointIndex>(std::move(index));
+  });
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>

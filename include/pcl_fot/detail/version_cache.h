@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+
+namespace pcl {
+namespace fot {
+namespace detail {
+
+/**
+ * A value built on demand from an object that changes, kept until the object's version moves on. Const
+ * queries of the object may ask for it from many threads at once. A copy starts empty: the value belongs to
+ * the object it was built from.
+ */
+template <typename T>
+class VersionCache {
+ public:
+  VersionCache() = default;
+  VersionCache(const VersionCache&) {}
+  VersionCache& operator=(const VersionCache&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    value_.reset();
+    return *this;
+  }
+
+  /** The value for this version: the kept one, or build()'s. */
+  template <typename Build>
+  std::shared_ptr<const T> get(std::uint64_t version, Build&& build) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!value_ || version_ != version) {
+      value_ = build();
+      version_ = version;
+    }
+    return value_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::shared_ptr<const T> value_;
+  std::uint64_t version_ = 0;
+};
+
+}  // namespace detail
+}  // namespace fot
+}  // namespace pcl
