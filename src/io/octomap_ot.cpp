@@ -45,7 +45,6 @@ class OtReader {
     const unsigned children = at_[data_bytes_];
     at_ += data_bytes_ + 1;
     ++nodes_;
-    const std::int32_t side = std::int32_t(1) << (kDepth - depth);
     if (children == 0) {  // a leaf: a voxel, or a pruned cube of them
       if (!std::isfinite(log_odds)) throw fail("a leaf's log-odds is not finite");
       leaf(corner, depth, log_odds);
