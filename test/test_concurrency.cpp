@@ -158,6 +158,34 @@ TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
   });
 }
 
+TEST(Concurrency, SearchQueriesBetweenUpdates) {
+  // Queries from many threads at once, then an update alone, in turn: a sliding window of a room scan.
+  const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  pcl::PointCloud<pcl::PointXYZ> frames[4];
+  for (std::size_t i = 0; i < cloud->size(); ++i) frames[i % 4].push_back((*cloud)[i]);
+  search::FastOctTreeSearch<pcl::PointXYZ> window;
+  window.addPoints(frames[0]);
+  for (int f = 1; f < 4; ++f) {
+    window.addPoints(frames[f]);
+    pcl::Indices oldest;
+    for (std::size_t i = 0; i < frames[f - 1].size(); i += 2)
+      oldest.push_back(pcl::index_t(i + (f - 1) * frames[0].size()));
+    window.removePoints(oldest);
+    std::vector<pcl::Indices> serial(frames[f].size() / 17 + 1);
+    std::vector<float> d;
+    for (std::size_t i = 0; i < frames[f].size(); i += 17)
+      window.nearestKSearch(frames[f][i], 3, serial[i / 17], d);
+    together([&](unsigned t) {
+      pcl::Indices idx;
+      std::vector<float> dist;
+      for (std::size_t i = 17 * t; i < frames[f].size(); i += 17 * kThreads) {
+        window.nearestKSearch(frames[f][i], 3, idx, dist);
+        ASSERT_EQ(idx, serial[i / 17]);
+      }
+    });
+  }
+}
+
 TEST(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {
   const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
   EXPECT_EQ(detail::workerCount(0, 1000), std::min<std::size_t>(hardware, 1000));

@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 #include <pcl_fot/tree/accessor.h>
 
@@ -74,6 +75,8 @@ constexpr std::int32_t kCentreKey = 0x2AAA;
 
 std::atomic<std::uint64_t> next_build_id{1};
 constexpr std::uint32_t kNoSlot = ~std::uint32_t(0);
+/** The bucket of the outliers in an updated index: a key no cell has. */
+constexpr Key kOutliers{std::numeric_limits<std::int32_t>::min(), 0, 0};
 
 }  // namespace
 
@@ -136,7 +139,11 @@ class PointIndex::Policy {
    * A cell's points, or the outliers' (the run after the last cell). A crowded run is split into boxes (see
    * build), visited nearer first and skipped when beyond the bound.
    */
-  void visitCell(const TreeCoord&, std::uint64_t rank) {
+  void visitCell(const TreeCoord& cell, std::uint64_t rank) {
+    if (index_.updatable_) {
+      visitBucket(Key{tree_coord::toKey(cell[0]), tree_coord::toKey(cell[1]), tree_coord::toKey(cell[2])});
+      return;
+    }
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
     if (metric_ == Metric::Euclidean)
       scanRun<Metric::Euclidean>(rank, begin, end);
@@ -144,6 +151,18 @@ class PointIndex::Policy {
       scanRun<Metric::EuclideanEigen>(rank, begin, end);
     else
       scanRun<Metric::Manhattan>(rank, begin, end);
+  }
+
+  /** The points of a cell (or the outliers) in an updated index. */
+  void visitBucket(const Key& cell) {
+    std::uint32_t n;
+    const detail::BucketPoint* points = index_.buckets_.find(cell, n);
+    if (metric_ == Metric::Euclidean)
+      scanBucket<Metric::Euclidean>(points, n);
+    else if (metric_ == Metric::EuclideanEigen)
+      scanBucket<Metric::EuclideanEigen>(points, n);
+    else
+      scanBucket<Metric::Manhattan>(points, n);
   }
 
   /** Runs with more points than this are split into boxes. */
@@ -174,6 +193,15 @@ class PointIndex::Policy {
     const auto& roots = index_.crowd_root_;
     const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
     scanBoxes<M>(root->second);
+  }
+
+  /** A bucket's points; each one's slot is its index. */
+  template <Metric M>
+  void scanBucket(const detail::BucketPoint* points, std::uint32_t n) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const float d = pointDistance(M, points[i].p, q_);
+      if (double(d) <= bound_) keep(Hit{d, points[i].index, std::uint32_t(points[i].index)});
+    }
   }
 
   /** A crowded run's boxes, depth first, the nearer half first; a box is skipped once beyond the bound. */
@@ -374,11 +402,112 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     resolution_ = detail::coarserCellSize(tree_, placed.keys.size());
     placePoints(in, extent, placed);
   }
-  build_id_ = next_build_id++;
+  updatable_ = false;
+  buckets_.clear();
   ranks_.assign(tree_.poolWords(), 0);
   const std::uint64_t cells = assignRanks(tree_, tree_.root(), 0, 0, ranks_);
   fillTable(in, placed, cells);
   splitCrowdedRuns(cells);
+  any_ = !index_.empty() ? index_.front() : -1;
+  changed();
+}
+
+void PointIndex::changed() {
+  build_id_ = next_build_id++;
+}
+
+void PointIndex::makeUpdatable(std::int32_t offset) {
+  if (updatable_) return;
+  buckets_.clear();
+  ConstAccessor reader(tree_);
+  const auto fill = [&](const Key& cell, std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t i = begin; i < end; ++i)
+      buckets_.add(cell, &xyz_[3 * std::size_t(i)], index_[i] + offset);
+  };
+  tree_.forEachCell(CellState::Occupied, [&](const Key& cell) {
+    const std::uint32_t rank = cellRank(reader, cell);
+    fill(cell, start_[rank], start_[rank + 1]);
+  });
+  if (!start_.empty()) fill(kOutliers, start_[start_.size() - 2], start_.back());
+  updatable_ = true;
+  any_ = !index_.empty() ? index_.front() + offset : -1;
+  std::vector<std::uint64_t>().swap(ranks_);
+  std::vector<std::uint32_t>().swap(start_);
+  std::vector<float>().swap(xyz_);
+  std::vector<std::int32_t>().swap(index_);
+  std::vector<CrowdNode>().swap(crowd_);
+  crowd_root_.clear();
+  crowd_root_.shrink_to_fit();
+}
+
+std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                            std::int32_t first_index) {
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  const auto point = [&](std::size_t i) { return reinterpret_cast<const float*>(bytes + i * stride_bytes); };
+  if (first_index < 0) throw std::invalid_argument("pcl::fot::PointIndex::add: a negative first index");
+  makeUpdatable(0);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!finite3(point(i))) continue;
+    if (std::uint64_t(first_index) + i > std::uint64_t(std::numeric_limits<std::int32_t>::max()))
+      throw std::invalid_argument("pcl::fot::PointIndex::add: an index past INT32_MAX");
+    if (buckets_.contains(std::int32_t(first_index + std::int64_t(i))))
+      throw std::invalid_argument("pcl::fot::PointIndex::add: index " + std::to_string(first_index + i) +
+                                  " is held already");
+  }
+  if (size() == 0) {  // nothing to keep: the grid fits itself to these points
+    build(xyz, count, stride_bytes);
+    makeUpdatable(first_index);
+    return size();
+  }
+  const std::size_t before = size();
+  Accessor writer(tree_);
+  const CellGrid& grid = tree_.getGrid();
+  for (std::size_t i = 0; i < count; ++i) {
+    const float* p = point(i);
+    if (!finite3(p)) continue;
+    const std::int32_t index = std::int32_t(first_index + std::int64_t(i));
+    Key key;
+    if (!grid.pointToKey(p[0], p[1], p[2], key)) {
+      buckets_.add(kOutliers, p, index);
+    } else if (buckets_.add(key, p, index)) {
+      writer.setValidCell(key, CellState::Occupied);
+    }
+  }
+  if (any_ < 0 && size() > 0) any_ = first_index;
+  changed();
+  return size() - before;
+}
+
+std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
+  makeUpdatable(0);
+  Accessor writer(tree_);
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    Key cell;
+    bool emptied;
+    if (!buckets_.remove(indices[i], cell, emptied)) continue;
+    ++removed;
+    if (emptied && cell != kOutliers) writer.setValidCell(cell, CellState::Unknown);
+  }
+  if (removed > 0) {
+    if (!buckets_.contains(any_)) {
+      any_ = -1;
+      buckets_.forEachPoint([&](const detail::BucketPoint& p) { any_ = p.index; });
+    }
+    changed();
+  }
+  return removed;
+}
+
+std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool inside) {
+  makeUpdatable(0);
+  std::vector<std::int32_t> doomed;
+  buckets_.forEachPoint([&](const detail::BucketPoint& p) {
+    const bool in = p.p[0] >= lo[0] && p.p[0] <= hi[0] && p.p[1] >= lo[1] && p.p[1] <= hi[1] &&
+                    p.p[2] >= lo[2] && p.p[2] <= hi[2];
+    if (in == inside) doomed.push_back(p.index);
+  });
+  return remove(doomed.data(), doomed.size());
 }
 
 void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed) {
@@ -512,7 +641,7 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
                                std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
   indices.clear();
   distances.clear();
-  if (!finite3(q) || k == 0 || bound < 0 || index_.empty()) return 0;
+  if (!finite3(q) || k == 0 || bound < 0 || size() == 0) return 0;
 
   // This thread's path from its previous query on this build, so queries in spatial order start near.
   thread_local const PointIndex* owner = nullptr;
@@ -545,12 +674,22 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   Policy policy(*this, q, qc, metric, keep, bound, results);
   // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
   // a point twice is harmless for one neighbour (the repeat does not beat itself).
-  if (keep == 1 && last_slot != kNoSlot)
-    policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
-  const std::size_t outliers = start_.size() - 2;  // the rank of the run after the cells'
-  if (start_[outliers] > 0)
-    detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
-  if (start_[outliers + 1] > start_[outliers]) policy.visitCell(TreeCoord(), outliers);
+  if (updatable_) {
+    if (keep == 1 && buckets_.contains(std::int32_t(last_slot))) {
+      const detail::BucketPoint& p = buckets_.point(std::int32_t(last_slot));
+      policy.offer(p.p, p.index, last_slot);
+    }
+    if (tree_.getOccupiedCount() > 0)
+      detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, nullptr, policy).run(*accessor, key);
+    policy.visitBucket(kOutliers);
+  } else {
+    if (keep == 1 && last_slot != kNoSlot)
+      policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
+    const std::size_t outliers = start_.size() - 2;  // the rank of the run after the cells'
+    if (start_[outliers] > 0)
+      detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
+    if (start_[outliers + 1] > start_[outliers]) policy.visitCell(TreeCoord(), outliers);
+  }
 
   if (keep == Policy::kAll || keep > Policy::kLargeK) std::sort(results.begin(), results.end());
   if (k == 1 && !results.empty()) last_slot = results.front().slot;
@@ -584,7 +723,7 @@ std::size_t PointIndex::getMemoryBytes() const {
   return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
          index_.capacity() * sizeof(std::int32_t) + crowd_.capacity() * sizeof(CrowdNode) +
-         crowd_root_.capacity() * sizeof(crowd_root_[0]);
+         crowd_root_.capacity() * sizeof(crowd_root_[0]) + buckets_.memoryBytes();
 }
 
 }  // namespace fot

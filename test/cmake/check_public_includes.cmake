@@ -8,7 +8,8 @@ set(allowed
   "pcl_fot/pcl/octree_point_cloud_search.h:pcl_fot/detail/version_cache.h"
   "pcl_fot/pcl/impl/fast_oct_tree_search.hpp:pcl_fot/detail/cloud_fingerprint.h"
   "pcl_fot/pcl/impl/fast_oct_tree_search.hpp:pcl_fot/detail/worker_threads.h"
-  "pcl_fot/pcl/impl/transformation_validation_psi.hpp:pcl_fot/detail/cloud_fingerprint.h")
+  "pcl_fot/pcl/impl/transformation_validation_psi.hpp:pcl_fot/detail/cloud_fingerprint.h"
+  "pcl_fot/search/point_index.h:pcl_fot/detail/cell_buckets.h")
 file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}" "${INCLUDE_DIR}/pcl_fot/*.h" "${INCLUDE_DIR}/pcl_fot/*.hpp")
 set(failures "")
 foreach(header ${headers})

@@ -31,6 +31,14 @@ namespace search {
  * setInputCloud builds the index (the tree plus a table from cells to points). Calling it again with the
  * same cloud, indices and coordinates, as ICP does twice per align(), costs one pass over the points.
  * Only x, y, z are used; a custom point representation is ignored.
+ *
+ * The index also updates in place, for maps that grow and forget (odometry, a sliding window, ICP against
+ * a growing map): addPoints, removePoints and removeOutsideBox. Indices stay stable: added points are
+ * numbered after the input cloud's, and getInputCloud() returns the input with them appended (a copy the
+ * search keeps from the first addPoints on); removed points keep their place in it and are no longer found.
+ * Results after any updates equal those of a new search of the points held. No query may run during an
+ * update: queries are const and may run from many threads at once, updates are not. setInputCloud starts
+ * over from the cloud it is given.
  */
 template <typename PointT>
 class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
@@ -62,6 +70,30 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
                      std::vector<float>& k_sqr_distances) const override;
   int radiusSearch(const PointT& point, double radius, Indices& k_indices,
                    std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override;
+
+  /**
+   * Adds the points of `cloud`: point i gets index n + i, where n is the input cloud's size before the call.
+   * Those that are not finite are skipped (counted by getSkippedCount) but keep their index. Returns how
+   * many were added.
+   */
+  std::size_t addPoints(const PointCloud& cloud);
+  /**
+   * Removes the points with these indices; returns how many were held. An index outside the input cloud is
+   * an error (PCL_ERROR): then nothing is removed.
+   */
+  std::size_t removePoints(const Indices& indices);
+  /** Removes the points inside the box [min_pt, max_pt], bounds included; returns how many. */
+  std::size_t removePoints(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt);
+  /** Removes the points outside the box [min_pt, max_pt]; returns how many. */
+  std::size_t removeOutsideBox(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt);
+  /** Points held: those indexed, less those removed. */
+  std::size_t size() const {
+    return index_.size();
+  }
+  /** Points given since setInputCloud (by it or addPoints) that were not indexed: not finite. */
+  std::size_t getSkippedCount() const {
+    return skipped_;
+  }
 
   /** PCL's batch searches, over setNumberOfThreads() threads; the results do not depend on the count. */
   void nearestKSearch(const PointCloud& cloud, const Indices& indices, int k, std::vector<Indices>& k_indices,
@@ -110,6 +142,9 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
     }
   };
   Source describe(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) const;
+  /** A box's removal (inside or outside), after its check. */
+  std::size_t removeBox(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt, bool inside,
+                        const char* caller);
   /** Runs query(i) for i in [0, n), split into contiguous runs over the threads. */
   template <typename Query>
   void forEachQuery(std::size_t n, Query&& query) const;
@@ -117,6 +152,8 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   PointIndex index_;
   Metric metric_ = Metric::Euclidean;
   Source built_;
+  shared_ptr<PointCloud> grown_;  // the input with the added points, once there are any
+  std::size_t skipped_ = 0;
   unsigned threads_ = 1;
 };
 

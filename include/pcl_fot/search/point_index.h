@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include <pcl_fot/detail/cell_buckets.h>
 #include <pcl_fot/search/nearest_cell_search.h>
 #include <pcl_fot/tree/accessor.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
@@ -21,6 +22,11 @@ namespace fot {
  * Distances are those PCL's searches report: squared Euclidean, (dx² + dy²) + dz² in float, or Manhattan,
  * (|dx| + |dy|) + |dz|. Results are exact, nearest first, and ties go to the smaller point index.
  * Const queries are safe from many threads at once; each thread reuses its own path from query to query.
+ *
+ * The index updates in place: add, remove and removeBox. The first update turns the table into one bucket
+ * of points per cell, which later updates change point by point (detail::CellBuckets); build makes it
+ * static again. Results after any updates equal those of a fresh build of the points held. An update
+ * needs the index alone: no query may run during one.
  */
 class PointIndex {
  public:
@@ -43,10 +49,25 @@ class PointIndex {
   void build(const float* xyz, std::size_t count, std::size_t stride_bytes,
              const std::int32_t* subset = nullptr, std::size_t subset_size = 0);
 
-  /** Points indexed: the finite ones of those given to build. */
-  std::size_t size() const { return index_.size(); }
-  /** The index, as given to build, of one point indexed; -1 if none is. */
-  std::int32_t anyPoint() const { return !index_.empty() ? index_.front() : -1; }
+  /**
+   * Adds points `first_index + i` (point i at byte offset i * stride_bytes); those that are not finite are
+   * left out. An empty index first centres its grid on these points (and picks its edge, if automatic).
+   * Returns how many were added. Throws std::invalid_argument, adding none, if a finite point's index is
+   * held already or would pass INT32_MAX, or first_index is negative.
+   */
+  std::size_t add(const float* xyz, std::size_t count, std::size_t stride_bytes, std::int32_t first_index);
+  /** Removes the points with these indices; returns how many of them were held. */
+  std::size_t remove(const std::int32_t* indices, std::size_t count);
+  /**
+   * Removes the points inside the box [lo, hi], bounds included, or with inside = false those outside it;
+   * returns how many.
+   */
+  std::size_t removeBox(const float lo[3], const float hi[3], bool inside);
+
+  /** Points indexed: the finite ones of those given to build, then added and not removed. */
+  std::size_t size() const { return updatable_ ? buckets_.size() : index_.size(); }
+  /** The index, as given, of one point indexed; -1 if none is. */
+  std::int32_t anyPoint() const { return any_; }
   /** The cell edge: the one given, or the one the last build picked (0.01 m before the first). */
   double resolution() const { return resolution_; }
   bool automatic() const { return automatic_; }
@@ -89,6 +110,10 @@ class PointIndex {
   void splitCrowdedRuns(std::uint64_t cells);
   /** Appends the box of run[begin, end) (table slots from `first`) and, recursively, its halves. */
   void splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin, std::uint32_t end);
+  /** Moves the points into buckets, their indices raised by `offset`, for the updates. */
+  void makeUpdatable(std::int32_t offset);
+  /** Marks a change: each thread's cached path and previous answer belong to the build before. */
+  void changed();
   std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
                      std::vector<std::int32_t>& indices, std::vector<float>& distances) const;
 
@@ -113,6 +138,10 @@ class PointIndex {
   // each one's cell rank and first node, by rank.
   std::vector<CrowdNode> crowd_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> crowd_root_;
+  // Once updated: each cell's points, the outliers under a key no cell has; the table above is then empty.
+  bool updatable_ = false;
+  detail::CellBuckets buckets_;
+  std::int32_t any_ = -1;  // anyPoint()
 };
 
 }  // namespace fot

@@ -55,10 +55,75 @@ FastOctTreeSearch<PointT>::setInputCloud(const PointCloudConstPtr& cloud, const 
       index_.build(&(*cloud)[0].x, cloud->size(), sizeof(PointT));
     }
     built_ = source;
+    skipped_ = (indices ? indices->size() : (cloud ? cloud->size() : 0)) - index_.size();
   }
+  grown_.reset();
 #if PCL_VERSION_COMPARE(>=, 1, 14, 0)
   return cloud != nullptr;
 #endif
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud) {
+  if (!grown_) {
+    grown_ = this->input_ ? make_shared<PointCloud>(*this->input_) : make_shared<PointCloud>();
+    this->input_ = grown_;
+    built_ = Source{};
+  }
+  const std::size_t first = grown_->size();
+  if (cloud.empty()) return 0;
+  if (first + cloud.size() > std::size_t(std::numeric_limits<index_t>::max())) {
+    PCL_ERROR(
+        "[pcl::fot::search::FastOctTreeSearch::addPoints] %zu points would pass the largest index; "
+        "none added.\n",
+        cloud.size());
+    return 0;
+  }
+  grown_->insert(grown_->end(), cloud.begin(), cloud.end());
+  const std::size_t added = index_.add(&cloud[0].x, cloud.size(), sizeof(PointT), index_t(first));
+  skipped_ += cloud.size() - added;
+  return added;
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::removePoints(const Indices& indices) {
+  const std::size_t n = this->input_ ? this->input_->size() : 0;
+  for (const index_t i : indices)
+    if (i < 0 || std::size_t(i) >= n) {
+      PCL_ERROR(
+          "[pcl::fot::search::FastOctTreeSearch::removePoints] Index %d lies outside the input cloud "
+          "(%zu points); nothing removed.\n",
+          int(i), n);
+      return 0;
+    }
+  built_ = Source{};
+  return index_.remove(indices.data(), indices.size());
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::removeBox(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt,
+                                                 bool inside, const char* caller) {
+  if (!min_pt.allFinite() || !max_pt.allFinite() || (min_pt.array() > max_pt.array()).any()) {
+    PCL_ERROR(
+        "[pcl::fot::search::FastOctTreeSearch::%s] The box needs finite bounds, min <= max; nothing "
+        "removed.\n",
+        caller);
+    return 0;
+  }
+  built_ = Source{};
+  return index_.removeBox(min_pt.data(), max_pt.data(), inside);
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::removePoints(const Eigen::Vector3f& min_pt,
+                                                    const Eigen::Vector3f& max_pt) {
+  return removeBox(min_pt, max_pt, true, "removePoints");
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::removeOutsideBox(const Eigen::Vector3f& min_pt,
+                                                        const Eigen::Vector3f& max_pt) {
+  return removeBox(min_pt, max_pt, false, "removeOutsideBox");
 }
 
 template <typename PointT>
@@ -66,6 +131,7 @@ int FastOctTreeSearch<PointT>::nearestKSearch(const PointT& point, int k, Indice
                                               std::vector<float>& k_sqr_distances) const {
   const float q[3] = {point.x, point.y, point.z};
   if (k <= 0) {
+    PCL_ERROR("[pcl::fot::search::FastOctTreeSearch::nearestKSearch] k = %d: it must be at least 1.\n", k);
     k_indices.clear();
     k_sqr_distances.clear();
     return 0;
@@ -84,6 +150,9 @@ template <typename PointT>
 int FastOctTreeSearch<PointT>::radiusSearch(const PointT& point, double radius, Indices& k_indices,
                                             std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
   if (!(radius > 0.0)) {  // as in BruteForce; KdTreeFLANN agrees at 0 and squares a negative radius
+    if (!(radius == 0.0))
+      PCL_ERROR("[pcl::fot::search::FastOctTreeSearch::radiusSearch] Radius %g: it must be 0 or more.\n",
+                radius);
     k_indices.clear();
     k_sqr_distances.clear();
     return 0;

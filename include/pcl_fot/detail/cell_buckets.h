@@ -1,0 +1,81 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <pcl_fot/tree/key.h>
+
+namespace pcl {
+namespace fot {
+namespace detail {
+
+/** A point in a bucket: its coordinates and its index as the user numbers it. */
+struct BucketPoint {
+  float p[3];
+  std::int32_t index;
+};
+
+/**
+ * The updatable half of a PointIndex: each cell's points in a bucket of their own, found by the cell's key
+ * in an open-addressing table, and each point's place found by its index. Adding or removing a point moves
+ * no other point but the last of its bucket, so updates cost O(1) whatever the index holds.
+ */
+class CellBuckets {
+ public:
+  void clear();
+  /** Adds a point to the bucket of `cell`; returns true if the bucket was empty. The index must be new. */
+  bool add(const Key& cell, const float p[3], std::int32_t index);
+  /**
+   * Removes the point `index`: false if it is not held. Else `cell` is its cell, and `emptied` tells whether
+   * the cell now holds none.
+   */
+  bool remove(std::int32_t index, Key& cell, bool& emptied);
+  bool contains(std::int32_t index) const {
+    return index >= 0 && std::size_t(index) < where_.size() && where_[std::size_t(index)] != kNowhere;
+  }
+  /** The point `index`, which must be held. */
+  const BucketPoint& point(std::int32_t index) const {
+    const std::uint64_t w = where_[std::size_t(index)];
+    return buckets_[std::size_t(w >> 32)][std::uint32_t(w)];
+  }
+  /** The points of `cell`: none if it holds none. */
+  const BucketPoint* find(const Key& cell, std::uint32_t& count) const;
+  std::size_t size() const { return size_; }
+  /** Calls visit(point) for every point held. */
+  template <typename Visit>
+  void forEachPoint(Visit&& visit) const {
+    for (const Slot& s : slots_)
+      if (s.bucket != kFree)
+        for (const BucketPoint& p : buckets_[s.bucket]) visit(p);
+  }
+  std::size_t memoryBytes() const;
+
+ private:
+  static constexpr std::uint32_t kFree = ~std::uint32_t(0);
+  static constexpr std::uint64_t kNowhere = ~std::uint64_t(0);
+  /** A table slot: a cell and its bucket, kFree if the slot is unused. */
+  struct Slot {
+    Key cell;
+    std::uint32_t bucket = kFree;
+  };
+
+  std::size_t home(const Key& cell) const;
+  /** The slot of `cell`, or the free slot where it would go. */
+  std::size_t probe(const Key& cell) const;
+  void grow();
+  /** Frees slot i and shifts back the entries after it that probed past it. */
+  void erase(std::size_t i);
+
+  std::vector<Slot> slots_;  // a power of two, at most half full
+  std::size_t used_ = 0;
+  std::vector<std::vector<BucketPoint>> buckets_;
+  std::vector<Key> cell_of_;          // by bucket
+  std::vector<std::uint32_t> spare_;  // buckets no cell uses, kept for the next new cell
+  std::vector<std::uint64_t> where_;  // by point index: bucket << 32 | position in it
+  std::size_t size_ = 0;
+};
+
+}  // namespace detail
+}  // namespace fot
+}  // namespace pcl
