@@ -240,3 +240,25 @@ TEST(SearchUpdates, BadInputGetsAnErrorAndChangesNothing) {
   EXPECT_EQ(search.removePoints(pcl::Indices{7}), 0u);
   EXPECT_EQ(search.size(), 49u);
 }
+
+TEST(SearchUpdates, ACrowdedMapPicksItsCellsAnewAndAnswersAlike) {
+  // Frames of one place pile up in the cells picked for the first: the grid is fitted again, exactly.
+  const Cloud::Ptr room = pcl_fot_test::loadScan("room_scan1.pcd");
+  Search grown;
+  Cloud part[8];
+  for (std::size_t i = 0; i < room->size(); ++i) part[i % 8].push_back((*room)[i]);
+  grown.addPoints(part[0]);
+  const double first_edge = grown.getResolution();
+  for (int p = 1; p < 8; ++p) grown.addPoints(part[p]);
+  EXPECT_LT(grown.getResolution(), first_edge);
+  Search fresh;
+  fresh.setInputCloud(grown.getInputCloud());
+  pcl::Indices got, want;
+  std::vector<float> dg, dw;
+  for (std::size_t i = 0; i < room->size(); i += 97) {
+    const PointXYZ q((*room)[i].x + 0.01f, (*room)[i].y, (*room)[i].z - 0.02f);
+    ASSERT_EQ(grown.nearestKSearch(q, 5, got, dg), fresh.nearestKSearch(q, 5, want, dw));
+    ASSERT_EQ(got, want);
+    ASSERT_EQ(dg, dw);
+  }
+}

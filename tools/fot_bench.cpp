@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
     if (wanted("cells")) md << fot_bench::benchCellAccess(scans, repeats) << "\n";
     if (wanted("rays")) md << fot_bench::benchRayTracing(scans, ray_repeats) << "\n";
     if (wanted("mapping")) md << fot_bench::benchMultiScan(scans, ray_repeats) << "\n";
-    if (wanted("search")) md << fot_bench::benchSearch(scans, ray_repeats) << "\n";
+    if (wanted("search"))
+      md << fot_bench::benchSearch(scans, ray_repeats) << "\n"
+         << fot_bench::benchSearchAgainstNanoflann(scans, data_dir, ray_repeats) << "\n";
     if (wanted("octree")) md << fot_bench::benchOctreeFamily(scans, ray_repeats) << "\n";
     if (wanted("algorithms")) md << fot_bench::benchPclAlgorithms(scans, ray_repeats) << "\n";
     if (wanted("psi")) md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, plot) << "\n";

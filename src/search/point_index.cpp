@@ -416,13 +416,13 @@ void PointIndex::changed() {
   build_id_ = next_build_id++;
 }
 
-void PointIndex::makeUpdatable(std::int32_t offset) {
+void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber) {
   if (updatable_) return;
   buckets_.clear();
   ConstAccessor reader(tree_);
   const auto fill = [&](const Key& cell, std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t i = begin; i < end; ++i)
-      buckets_.add(cell, &xyz_[3 * std::size_t(i)], index_[i] + offset);
+      buckets_.add(cell, &xyz_[3 * std::size_t(i)], renumber ? renumber[index_[i]] : index_[i] + offset);
   };
   tree_.forEachCell(CellState::Occupied, [&](const Key& cell) {
     const std::uint32_t rank = cellRank(reader, cell);
@@ -430,7 +430,7 @@ void PointIndex::makeUpdatable(std::int32_t offset) {
   });
   if (!start_.empty()) fill(kOutliers, start_[start_.size() - 2], start_.back());
   updatable_ = true;
-  any_ = !index_.empty() ? index_.front() + offset : -1;
+  any_ = index_.empty() ? -1 : renumber ? renumber[index_.front()] : index_.front() + offset;
   std::vector<std::uint64_t>().swap(ranks_);
   std::vector<std::uint32_t>().swap(start_);
   std::vector<float>().swap(xyz_);
@@ -474,8 +474,31 @@ std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t str
     }
   }
   if (any_ < 0 && size() > 0) any_ = first_index;
+  const std::size_t added = size() - before;
+  refitGrid();
   changed();
-  return size() - before;
+  return added;
+}
+
+void PointIndex::refitGrid() {
+  // A map that grows in place crowds its cells (frames of a moving sensor overlap), or thins out as it
+  // forgets. An automatic index then picks its edge anew, as a hash table grows: rarely, so it costs O(1)
+  // a point in the long run.
+  constexpr double kSlack = 4.0;
+  const double per_cell = double(size()) / double(std::max<std::uint64_t>(1, tree_.getOccupiedCount()));
+  if (!automatic_ || size() < 1024 ||
+      (per_cell <= kSlack * detail::kPointsPerCell && per_cell >= detail::kPointsPerCell / kSlack))
+    return;
+  std::vector<float> xyz;
+  std::vector<std::int32_t> ids;
+  xyz.reserve(3 * size());
+  ids.reserve(size());
+  buckets_.forEachPoint([&](const detail::BucketPoint& p) {
+    xyz.insert(xyz.end(), p.p, p.p + 3);
+    ids.push_back(p.index);
+  });
+  build(xyz.data(), ids.size(), 3 * sizeof(float));
+  makeUpdatable(0, ids.data());
 }
 
 std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
@@ -490,6 +513,7 @@ std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
     if (emptied && cell != kOutliers) writer.setValidCell(cell, CellState::Unknown);
   }
   if (removed > 0) {
+    refitGrid();
     if (!buckets_.contains(any_)) {
       any_ = -1;
       buckets_.forEachPoint([&](const detail::BucketPoint& p) { any_ = p.index; });

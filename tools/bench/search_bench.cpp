@@ -13,32 +13,18 @@
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/search/octree.h>
 #include <flann/flann.hpp>
-#include <nanoflann.hpp>
 
 #include <pcl_fot/pcl/cloud_insertion.h>
 #include <pcl_fot/pcl/fast_oct_tree_search.h>
 #include <pcl_fot/search/nearest_cell_search.h>
 
 #include "bench_util.h"
+#include "nanoflann_points.h"
 
 namespace fot_bench {
 namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
-
-/** nanoflann's dataset adaptor over packed xyz floats. */
-struct Points {
-  std::vector<float> xyz;
-  std::size_t kdtree_get_point_count() const { return xyz.size() / 3; }
-  float kdtree_get_pt(std::size_t i, std::size_t d) const { return xyz[3 * i + d]; }
-  template <typename Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
-template <typename Distance>
-using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<Distance, Points, 3, unsigned>;
 
 /** One contender: builds from the target, then answers one query, adding its distance to `sum`. */
 struct Method {
@@ -362,7 +348,7 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
           {"nanoflann",
            [&] {
              nano.reset(new NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>(
-                 3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(10)));
+                 3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(20)));
              nano->buildIndex();
            },
            [&](const pcl::PointXYZ& p, double& s) {

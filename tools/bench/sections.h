@@ -11,6 +11,10 @@ namespace fot_bench {
 std::string benchCellAccess(const std::vector<BenchScan>& scans, int repeats);
 std::string benchRayTracing(const std::vector<BenchScan>& scans, int repeats);
 std::string benchSearch(const std::vector<BenchScan>& scans, int repeats);
+/** FastOctTreeSearch against nanoflann as PCL 1.15 sets it up; the sliding-window map (reads the raw
+ * terrain). */
+std::string benchSearchAgainstNanoflann(const std::vector<BenchScan>& scans, const std::string& data_dir,
+                                        int repeats);
 /** pcl::fot's OctreePointCloudSearch and OctreePointCloudChangeDetector next to pcl::octree's. */
 std::string benchOctreeFamily(const std::vector<BenchScan>& scans, int repeats);
 /** PCL's features, surface, segmentation and registration algorithms with KdTree and with FastOctTreeSearch.

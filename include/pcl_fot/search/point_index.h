@@ -110,8 +110,13 @@ class PointIndex {
   void splitCrowdedRuns(std::uint64_t cells);
   /** Appends the box of run[begin, end) (table slots from `first`) and, recursively, its halves. */
   void splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin, std::uint32_t end);
-  /** Moves the points into buckets, their indices raised by `offset`, for the updates. */
-  void makeUpdatable(std::int32_t offset);
+  /**
+   * Moves the points into buckets, for the updates, their indices raised by `offset`, or each index i
+   * replaced by renumber[i].
+   */
+  void makeUpdatable(std::int32_t offset, const std::int32_t* renumber = nullptr);
+  /** An automatic index whose cells hold far more or fewer points than it picks them for is built anew. */
+  void refitGrid();
   /** Marks a change: each thread's cached path and previous answer belong to the build before. */
   void changed();
   std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
