@@ -187,6 +187,9 @@ class PointIndex::Policy {
   void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
     const float* xyz = index_.xyz_.data();
     if (end - begin <= kCrowded) {
+      // The points' own box bounds them tighter than the cell's.
+      const float* box = index_.run_box_[rank].data();
+      if (double(boxDistance<M>(box, box + 3)) > bound_) return;
       for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
       return;
     }
@@ -251,8 +254,12 @@ class PointIndex::Policy {
    */
   template <Metric M>
   float boxDistance(const CrowdNode& box) const {
+    return boxDistance<M>(box.lo, box.hi);
+  }
+  template <Metric M>
+  float boxDistance(const float* lo, const float* hi) const {
     float gap[3];
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({box.lo[a] - q_[a], q_[a] - box.hi[a], 0.0f});
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - q_[a], q_[a] - hi[a], 0.0f});
     if (M == Metric::Manhattan) return gap[0] + gap[1] + gap[2];
     return pointDistance(M, gap, kOrigin);
   }
@@ -407,6 +414,7 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   ranks_.assign(tree_.poolWords(), 0);
   const std::uint64_t cells = assignRanks(tree_, tree_.root(), 0, 0, ranks_);
   fillTable(in, placed, cells);
+  boxRuns(cells);
   splitCrowdedRuns(cells);
   any_ = !index_.empty() ? index_.front() : -1;
   changed();
@@ -435,6 +443,7 @@ void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber
   std::vector<std::uint32_t>().swap(start_);
   std::vector<float>().swap(xyz_);
   std::vector<std::int32_t>().swap(index_);
+  std::vector<std::array<float, 6>>().swap(run_box_);
   std::vector<CrowdNode>().swap(crowd_);
   crowd_root_.clear();
   crowd_root_.shrink_to_fit();
@@ -611,6 +620,21 @@ void PointIndex::fillTable(const Input& in, Placement& placed, std::uint64_t cel
   }
 }
 
+void PointIndex::boxRuns(std::uint64_t cells) {
+  run_box_.resize(std::size_t(cells) + 1);
+  for (std::size_t c = 0; c <= cells; ++c) {
+    std::array<float, 6>& box = run_box_[c];
+    box = {std::numeric_limits<float>::infinity(),  std::numeric_limits<float>::infinity(),
+           std::numeric_limits<float>::infinity(),  -std::numeric_limits<float>::infinity(),
+           -std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+    for (std::uint32_t i = start_[c]; i < start_[c + 1]; ++i)
+      for (int a = 0; a < 3; ++a) {
+        box[a] = std::min(box[a], xyz_[3 * std::size_t(i) + a]);
+        box[3 + a] = std::max(box[3 + a], xyz_[3 * std::size_t(i) + a]);
+      }
+  }
+}
+
 void PointIndex::splitCrowdedRuns(std::uint64_t cells) {
   // Crowded runs are split into boxes at the median of their longest side, for Policy::scanBoxes.
   crowd_.clear();
@@ -746,8 +770,9 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
 std::size_t PointIndex::getMemoryBytes() const {
   return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
-         index_.capacity() * sizeof(std::int32_t) + crowd_.capacity() * sizeof(CrowdNode) +
-         crowd_root_.capacity() * sizeof(crowd_root_[0]) + buckets_.memoryBytes();
+         index_.capacity() * sizeof(std::int32_t) + run_box_.capacity() * sizeof(run_box_[0]) +
+         crowd_.capacity() * sizeof(CrowdNode) + crowd_root_.capacity() * sizeof(crowd_root_[0]) +
+         buckets_.memoryBytes();
 }
 
 }  // namespace fot

@@ -1,4 +1,4 @@
-// PCL's own algorithms, each given KdTree (FLANN) and then FastOctTreeSearch through setSearchMethod.
+// PCL's own algorithms, each given KdTree (FLANN), nanoflann and FastOctTreeSearch through setSearchMethod.
 #include "sections.h"
 
 #include <cmath>
@@ -19,6 +19,7 @@
 #include <pcl_fot/pcl/fast_oct_tree_search.h>
 
 #include "bench_util.h"
+#include "nanoflann_search.h"
 
 namespace fot_bench {
 namespace {
@@ -146,7 +147,8 @@ std::vector<Algorithm> algorithms(const Cloud::Ptr& cloud, const pcl::PointCloud
 }
 
 /** One scan, filtered to a voxel grid of `res`, through every algorithm. */
-void benchScan(const BenchScan& scan, double res, int repeats, Table& table, std::vector<double>& ratios) {
+void benchScan(const BenchScan& scan, double res, int repeats, Table& table, std::vector<double>& ratios,
+               std::vector<double>& nano_ratios) {
   Cloud::Ptr cloud(new Cloud), moved(new Cloud);
   pcl::VoxelGrid<Point> grid;
   grid.setInputCloud(scan.cloud);
@@ -164,35 +166,45 @@ void benchScan(const BenchScan& scan, double res, int repeats, Table& table, std
   const MakeSearch flann = [] { return KdTree::Ptr(new KdTree); };
   const MakeSearch ours = [] { return KdTree::Ptr(new pcl::fot::search::FastOctTreeSearch<Point>); };
   for (const Algorithm& a : algorithms(cloud, normals, moved, res)) {
-    std::vector<double> t_flann, t_ours, r_flann, r_ours;
-    for (int r = 0; r < repeats; ++r) {  // in turn, so that a change in the machine's load falls on both
+    // As PCL 1.15's KdTreeNanoflann: leaves of 10 points where the algorithm asks 1-NN (ICP's
+    // correspondences), of 20 where it asks k-NN or radius searches.
+    const std::size_t leaf = a.name == "IterativeClosestPoint" ? 10 : 20;
+    const MakeSearch nano = [leaf] { return KdTree::Ptr(new NanoflannKdTree<Point>(leaf)); };
+    std::vector<double> t_flann, t_nano, t_ours, r_flann, r_ours;
+    for (int r = 0; r < repeats; ++r) {  // in turn, so that a change in the machine's load falls on all
       std::fprintf(stderr, "  PCL algorithms: %s, %s, round %d of %d\n", scan.name.c_str(), a.name.c_str(),
                    r + 1, repeats);
       t_flann.push_back(timeOnce([&] { r_flann = a.run(flann); }) * 1e3);
+      t_nano.push_back(timeOnce([&] { a.run(nano); }) * 1e3);
       t_ours.push_back(timeOnce([&] { r_ours = a.run(ours); }) * 1e3);
     }
-    const double ratio = median(t_flann) / median(t_ours);
+    const double ratio = median(t_flann) / median(t_ours), nano_ratio = median(t_nano) / median(t_ours);
     ratios.push_back(ratio);
+    nano_ratios.push_back(nano_ratio);
     table.add({scan.name, std::to_string(cloud->size()), a.name, a.setting, format("%.1f", median(t_flann)),
-               format("%.1f", median(t_ours)), format("**%.2f×**", ratio), agreement(a, r_flann, r_ours)});
+               format("%.1f", median(t_nano)), format("%.1f", median(t_ours)), format("**%.2f×**", ratio),
+               format("**%.2f×**", nano_ratio), agreement(a, r_flann, r_ours)});
   }
 }
 
 }  // namespace
 
 std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats) {
-  Table table({"scan", "points", "algorithm", "setting", "KdTree (FLANN) ms", "FastOctTreeSearch ms",
-               "KdTree / FOT", "results"});
-  std::vector<double> ratios;
-  benchScan(findScan(scans, "room_scan1"), 0.05, repeats, table, ratios);
-  benchScan(findScan(scans, "kinect_capture0001"), 0.01, repeats, table, ratios);
+  Table table({"scan", "points", "algorithm", "setting", "KdTree (FLANN) ms", "nanoflann ms",
+               "FastOctTreeSearch ms", "KdTree / FOT", "nanoflann / FOT", "results (FLANN, FOT)"});
+  std::vector<double> ratios, nano_ratios;
+  benchScan(findScan(scans, "room_scan1"), 0.05, repeats, table, ratios, nano_ratios);
+  benchScan(findScan(scans, "kinect_capture0001"), 0.01, repeats, table, ratios, nano_ratios);
   const auto [lo, hi] = std::minmax_element(ratios.begin(), ratios.end());
+  const auto [nano_lo, nano_hi] = std::minmax_element(nano_ratios.begin(), nano_ratios.end());
   return "## PCL's algorithms with FastOctTreeSearch\n\n" +
          format(
              "Each algorithm runs on a scan filtered by `pcl::VoxelGrid`, once with `pcl::search::KdTree` "
-             "(FLANN) and once with `FastOctTreeSearch` made as a `KdTree` is (it picks its own cell edge), "
-             "both handed over by `setSearchMethod` and built anew in each run, as a user's code would. "
-             "Medians of %d rounds, the two in turn in each round. Normals for FPFH and region growing are "
+             "(FLANN), once with nanoflann behind the same interface, set up as PCL 1.15's `KdTreeNanoflann` "
+             "(leaves of 10 points for ICP's 1-NN, 20 for the others; `tools/bench/nanoflann_search.h`), and "
+             "once with `FastOctTreeSearch` made as a `KdTree` is (it picks its own cell edge), each handed "
+             "over by `setSearchMethod` and built anew in each run, as a user's code would. "
+             "Medians of %d rounds, the three in turn in each round. Normals for FPFH and region growing are "
              "computed once beforehand; ICP and GICP register the cloud moved by a small known motion back "
              "onto it. \"Results\" compares the two outputs: each point's cluster, or every number they "
              "hold (for MovingLeastSquares the points, not the normals, some of which PCL 1.13 leaves "
@@ -205,7 +217,10 @@ std::string benchPclAlgorithms(const std::vector<BenchScan>& scans, int repeats)
              "point).\n\n",
              repeats) +
          table.markdown() + "\n" +
-         format("Summary: KdTree's time over FastOctTreeSearch's is %.2f× to %.2f×.\n", *lo, *hi);
+         format(
+             "Summary: KdTree's time over FastOctTreeSearch's is %.2f× to %.2f×; nanoflann's %.2f× to "
+             "%.2f×.\n",
+             *lo, *hi, *nano_lo, *nano_hi);
 }
 
 }  // namespace fot_bench

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -106,6 +107,8 @@ class PointIndex {
   std::uint32_t cellRank(ConstAccessor& reader, const Key& k) const;
   /** Lists each cell's points contiguously, by rank, the outliers last. */
   void fillTable(const Input& in, Placement& placed, std::uint64_t cells);
+  /** The bounding box of each run's points (run_box_). */
+  void boxRuns(std::uint64_t cells);
   /** Splits the runs of more than Policy::kCrowded points into boxes (crowd_). */
   void splitCrowdedRuns(std::uint64_t cells);
   /** Appends the box of run[begin, end) (table slots from `first`) and, recursively, its halves. */
@@ -130,8 +133,9 @@ class PointIndex {
   // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
   // finite points beyond the key range, which every search scans (as a crowded cell).
   std::vector<std::uint32_t> start_;
-  std::vector<float> xyz_;           // the points, grouped by cell
-  std::vector<std::int32_t> index_;  // their indices as given to build
+  std::vector<float> xyz_;                     // the points, grouped by cell
+  std::vector<std::int32_t> index_;            // their indices as given to build
+  std::vector<std::array<float, 6>> run_box_;  // by rank: the box (low x, y, z, high x, y, z) of its points
   /** A box of a crowded run's points: a leaf, or split in two at the median of its longest side. */
   struct CrowdNode {
     float lo[3], hi[3];
