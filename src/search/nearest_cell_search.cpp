@@ -83,7 +83,7 @@ class NearestCellSearch::NearestOne : public Measure {
    * A box only as near as the best holds one cell that near, the query clamped into it: it can improve the
    * result only if that cell's key is smaller.
    */
-  bool mayImprove(Distance lower_bound, const TreeCoord& lo, unsigned level) const {
+  bool mayImprove(Distance lower_bound, const TreeCoord& lo, unsigned level, std::size_t) const {
     if (lower_bound + tie_slack_ < bound_ || !found_) return true;  // nearer, or no tie rule
     return Candidate{lower_bound, clampInto(lo, level)} < best_;
   }
@@ -137,7 +137,7 @@ class NearestCellSearch::NearestK : public Measure {
       : Measure(metric, query), k_(k), limit_(limit), heap_(heap) {}
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound(); }
-  bool mayImprove(Distance, const TreeCoord&, unsigned) const { return true; }
+  bool mayImprove(Distance, const TreeCoord&, unsigned, std::size_t) const { return true; }
   bool settled(const TreeCoord& lo, unsigned level) const { return bound() < exterior(lo, level); }
   bool wholeRegions() const { return false; }
   void visitRegion(const TreeCoord&, unsigned, std::uint64_t) {}

@@ -26,9 +26,10 @@ namespace detail {
  * - `childGaps(lo, child_level, gap)`: for the cube at `lo` with children of child_level, per axis, the
  *   query's distance to the lower (gap[a][0]) and upper (gap[a][1]) half, in the metric's units (squared
  *   for Euclidean); a child's lower bound sums its halves';
- * - `worthVisiting(lower_bound)`: the pruning test, and `mayImprove(lower_bound, lo, level)` a second one
- *   for a box that passed it (boxes are taken nearest first, so the walk stops at the first box that fails
- *   the first test, and only skips one that fails the second);
+ * - `worthVisiting(lower_bound)`: the pruning test, and `mayImprove(lower_bound, lo, level, word)` a second
+ *   one for a box that passed it (boxes are taken nearest first, so the walk stops at the first box that
+ *   fails the first test, and only skips one that fails the second); `word` is the pool offset of the box's
+ *   node word, or kNoWord for an octant inside a bitmap word;
  * - `settled(lo, level)`: the stopping test, true when nothing outside the query's cube at `lo` can improve
  *   the result;
  * - `wholeRegions()`: visit uniform cubes whole rather than cell by cell;
@@ -36,6 +37,9 @@ namespace detail {
  * Cubes are given in tree coordinates. `rank` numbers target cells in the tree's Morton order when the walk
  * is given `ranks` (the rank of the first target cell under each bitmap word, by pool offset), else 0.
  */
+/** No node word of its own: an octant of a bitmap word. */
+constexpr std::size_t kNoWord = ~std::size_t(0);
+
 template <typename Policy>
 class NeighbourWalk {
  public:
@@ -127,28 +131,33 @@ class NeighbourWalk {
     const unsigned sub = level - 1;
     const std::uint32_t mask = bitmap ? node::octantMask(w, target_) : childrenWithTargets(w);
     const std::uint64_t rank = (bitmap && ranks_) ? ranks_[offset] : 0;
-    nearestChildren(base, sub, mask & ~(skip < 8 ? 1u << skip : 0u), [&](unsigned o, const TreeCoord& lo) {
-      if (bitmap) {
-        searchRegion(lo, sub, rank + node::cellsIn(node::popcount(mask & ((1u << o) - 1u)), sub));
-      } else {
-        const std::size_t at = node::childOffset(w, o);
-        searchWord(words_[at], at, sub, lo);
-      }
-    });
+    nearestChildren(base, sub, mask & ~(skip < 8 ? 1u << skip : 0u), bitmap ? kNoWord : node::childBase(w),
+                    [&](unsigned o, const TreeCoord& lo) {
+                      if (bitmap) {
+                        searchRegion(lo, sub,
+                                     rank + node::cellsIn(node::popcount(mask & ((1u << o) - 1u)), sub));
+                      } else {
+                        const std::size_t at = node::childOffset(w, o);
+                        searchWord(words_[at], at, sub, lo);
+                      }
+                    });
   }
 
   /**
    * Calls visit(octant, corner) for the octants in `mask` of the cube at `base`, children of level `sub`,
-   * nearest first, while they may still beat the result.
+   * nearest first, while they may still beat the result. `children` is the pool offset of the children's
+   * words, kNoWord for the octants of a bitmap word.
    */
   template <typename Visit>
-  void nearestChildren(const TreeCoord& base, unsigned sub, std::uint32_t mask, Visit&& visit) {
+  void nearestChildren(const TreeCoord& base, unsigned sub, std::uint32_t mask, std::size_t children,
+                       Visit&& visit) {
     Child c[8];
     const int n = nearestFirst(base, sub, mask, c);
     for (int i = 0; i < n; ++i) {
       if (!policy_.worthVisiting(c[i].bound)) return;
       const TreeCoord lo = base.child(c[i].octant, sub);
-      if (policy_.mayImprove(c[i].bound, lo, sub)) visit(c[i].octant, lo);
+      if (policy_.mayImprove(c[i].bound, lo, sub, children == kNoWord ? kNoWord : children + c[i].octant))
+        visit(c[i].octant, lo);
     }
   }
 
@@ -184,7 +193,8 @@ class NeighbourWalk {
       policy_.childGaps(lo, sub, gap);
       const Distance bound = childBound(gap, o);
       lo = lo.child(o, sub);
-      if (!policy_.worthVisiting(bound) || !policy_.mayImprove(bound, lo, sub)) return;
+      if (!policy_.worthVisiting(bound) || !policy_.mayImprove(bound, lo, sub, node::childOffset(w, o)))
+        return;
       offset = node::childOffset(w, o);
       w = words_[offset];
       level = sub;
@@ -206,7 +216,7 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
-    nearestChildren(base, sub, mask, [&](unsigned o, const TreeCoord& lo) {
+    nearestChildren(base, sub, mask, kNoWord, [&](unsigned o, const TreeCoord& lo) {
       searchRegion(lo, sub, rank + node::cellsIn(node::popcount(mask & ((1u << o) - 1u)), sub));
     });
   }
@@ -214,7 +224,7 @@ class NeighbourWalk {
   /** The children of a reference word that may hold targets (`children`), nearest first. */
   void searchChildren(NodeWord w, std::uint32_t children, unsigned level, const TreeCoord& base) {
     const unsigned sub = level - 1;
-    nearestChildren(base, sub, children, [&](unsigned o, const TreeCoord& lo) {
+    nearestChildren(base, sub, children, node::childBase(w), [&](unsigned o, const TreeCoord& lo) {
       const std::size_t at = node::childOffset(w, o);
       searchWord(words_[at], at, sub, lo);
     });
@@ -231,7 +241,7 @@ class NeighbourWalk {
       return;
     }
     const unsigned sub = level - 1;
-    nearestChildren(lo, sub, 0xFFu, [&](unsigned o, const TreeCoord& child) {
+    nearestChildren(lo, sub, 0xFFu, kNoWord, [&](unsigned o, const TreeCoord& child) {
       searchRegion(child, sub, rank + node::cellsIn(o, sub));
     });
   }

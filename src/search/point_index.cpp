@@ -70,6 +70,32 @@ std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_
   return next;
 }
 
+using Box = std::array<float, 6>;  // low x, y, z, high x, y, z
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr Box kNoBox = {kInf, kInf, kInf, -kInf, -kInf, -kInf};
+
+void unite(Box& box, const Box& other) {
+  for (int a = 0; a < 3; ++a)
+    box[a] = std::min(box[a], other[a]), box[3 + a] = std::max(box[3 + a], other[3 + a]);
+}
+
+/** The box of the points under each node word, from their runs' boxes (by rank): words[offset]. */
+Box boxWords(const FastOctTree& tree, const NodeView& n, std::size_t offset,
+             const std::vector<std::uint64_t>& ranks, const std::vector<Box>& runs, std::vector<Box>& words) {
+  Box box = kNoBox;
+  if (n.isBitmap()) {
+    const std::uint64_t first = ranks[offset],
+                        count = node::cellsIn(node::popcount(node::octantMask(n.word, CellState::Occupied)),
+                                              n.level - 1);
+    for (std::uint64_t r = first; r < first + count; ++r) unite(box, runs[r]);
+  } else {
+    for (unsigned o = 0; o < 8; ++o)
+      unite(box, boxWords(tree, n.child(tree.words(), o), n.childOffset(o), ranks, runs, words));
+  }
+  words[offset] = box;
+  return box;
+}
+
 /** The key of the points' centre: tree coordinate 0x2AAAAAAA, halfway between level boundaries. */
 constexpr std::int32_t kCentreKey = 0x2AAA;
 
@@ -130,7 +156,16 @@ class PointIndex::Policy {
   }
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
-  bool mayImprove(Distance, const TreeCoord&, unsigned) const { return true; }
+  /** The box of the node's points bounds them tighter than the node's cube: queries far away prune more. */
+  bool mayImprove(Distance, const TreeCoord&, unsigned, std::size_t word) const {
+    if (word == detail::kNoWord || index_.word_box_.empty()) return true;
+    const float* box = index_.word_box_[word].data();
+    float gap[3];
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({box[a] - q_[a], q_[a] - box[3 + a], 0.0f});
+    const float d =
+        metric_ == Metric::Manhattan ? gap[0] + gap[1] + gap[2] : pointDistance(metric_, gap, kOrigin);
+    return !(double(d) > bound_);
+  }
   bool settled(const TreeCoord& lo, unsigned level) const { return bound_ < exterior(lo, level); }
   bool wholeRegions() const { return false; }
   void visitRegion(const TreeCoord&, unsigned, std::uint64_t) {}
@@ -415,6 +450,8 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   const std::uint64_t cells = assignRanks(tree_, tree_.root(), 0, 0, ranks_);
   fillTable(in, placed, cells);
   boxRuns(cells);
+  word_box_.assign(tree_.poolWords(), kNoBox);
+  boxWords(tree_, tree_.root(), 0, ranks_, run_box_, word_box_);
   splitCrowdedRuns(cells);
   any_ = !index_.empty() ? index_.front() : -1;
   changed();
@@ -444,6 +481,7 @@ void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber
   std::vector<float>().swap(xyz_);
   std::vector<std::int32_t>().swap(index_);
   std::vector<std::array<float, 6>>().swap(run_box_);
+  std::vector<std::array<float, 6>>().swap(word_box_);
   std::vector<CrowdNode>().swap(crowd_);
   crowd_root_.clear();
   crowd_root_.shrink_to_fit();
@@ -623,10 +661,8 @@ void PointIndex::fillTable(const Input& in, Placement& placed, std::uint64_t cel
 void PointIndex::boxRuns(std::uint64_t cells) {
   run_box_.resize(std::size_t(cells) + 1);
   for (std::size_t c = 0; c <= cells; ++c) {
-    std::array<float, 6>& box = run_box_[c];
-    box = {std::numeric_limits<float>::infinity(),  std::numeric_limits<float>::infinity(),
-           std::numeric_limits<float>::infinity(),  -std::numeric_limits<float>::infinity(),
-           -std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+    Box& box = run_box_[c];
+    box = kNoBox;
     for (std::uint32_t i = start_[c]; i < start_[c + 1]; ++i)
       for (int a = 0; a < 3; ++a) {
         box[a] = std::min(box[a], xyz_[3 * std::size_t(i) + a]);
@@ -770,7 +806,8 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
 std::size_t PointIndex::getMemoryBytes() const {
   return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
-         index_.capacity() * sizeof(std::int32_t) + run_box_.capacity() * sizeof(run_box_[0]) +
+         index_.capacity() * sizeof(std::int32_t) +
+         (run_box_.capacity() + word_box_.capacity()) * sizeof(run_box_[0]) +
          crowd_.capacity() * sizeof(CrowdNode) + crowd_root_.capacity() * sizeof(crowd_root_[0]) +
          buckets_.memoryBytes();
 }

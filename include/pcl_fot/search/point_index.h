@@ -133,9 +133,10 @@ class PointIndex {
   // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
   // finite points beyond the key range, which every search scans (as a crowded cell).
   std::vector<std::uint32_t> start_;
-  std::vector<float> xyz_;                     // the points, grouped by cell
-  std::vector<std::int32_t> index_;            // their indices as given to build
-  std::vector<std::array<float, 6>> run_box_;  // by rank: the box (low x, y, z, high x, y, z) of its points
+  std::vector<float> xyz_;                      // the points, grouped by cell
+  std::vector<std::int32_t> index_;             // their indices as given to build
+  std::vector<std::array<float, 6>> run_box_;   // by rank: the box (low x, y, z, high x, y, z) of its points
+  std::vector<std::array<float, 6>> word_box_;  // by pool word: the box of the points under it
   /** A box of a crowded run's points: a leaf, or split in two at the median of its longest side. */
   struct CrowdNode {
     float lo[3], hi[3];
