@@ -379,11 +379,11 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
              "**k-NN as the feature code asks it.** Every fourth finite point of a cloud into the cloud "
              "itself, as NormalEstimation queries, k = 10 and 50, and 300 for a large neighbourhood; build "
              "plus queries, medians of %d rounds, every method in turn in each round. FOT is "
-             "`FastOctTreeSearch` made as a `KdTree` is, with no cell size: it picks its own. The LiDAR "
-             "sweeps are synthetic and seeded: 32 rings of 2,000 returns from 2 to 80 m, and 64 rings of "
-             "8,000 "
-             "from 1 to 120 m over flat ground 1.8 m below the sensor, thousands of points in a cell near it "
-             "and one far away; the others are the real scans.\n\n",
+             "`FastOctTreeSearch` made as a `KdTree` is, with no cell size: it picks its own; nanoflann has "
+             "leaves of 20 points, as PCL 1.15's `KdTreeNanoflann` for k-NN. The LiDAR sweeps are synthetic "
+             "and seeded: 32 rings of 2,000 returns from 2 to 80 m, and 64 rings of 8,000 from 1 to 120 m "
+             "over flat ground 1.8 m below the sensor, thousands of points in a cell near it and one far "
+             "away; the others are the real scans.\n\n",
              repeats) +
          t.markdown() + "\n";
 }
@@ -415,7 +415,9 @@ std::string benchSearch(const std::vector<BenchScan>& scans, int repeats) {
       "distances in another order, so their sums may differ in the last digits). FOT search is "
       "`pcl::fot::search::FastOctTreeSearch`; its cell size is given per table, and pcl::search::Octree gets "
       "the same. At the voxel level the queries are the occupied cells of one map, in the tree's order, and "
-      "the targets those of the other; the batch is `NearestCellSearch::nearest(queries, matches)`.\n\n",
+      "the targets those of the other; the batch is `NearestCellSearch::nearest(queries, matches)`. "
+      "nanoflann "
+      "has leaves of 10 points here, as PCL 1.15's `KdTreeNanoflann` for 1-NN.\n\n",
       repeats);
   out += body;
   out += "Summary:\n\n";
