@@ -2,7 +2,8 @@
 // a resolution (or none, for the cell edge picked from the points), k, a metric and a radius, then points:
 // raw floats (NaN, Inf, huge, denormal), multiples of 1/64 (ties, duplicates, points on cell faces) or
 // multiples of 10^6. Every point is a query; k-NN and radius results must equal brute force's, distances to
-// the bit, ties to the smaller index.
+// the bit, ties to the smaller index. Then, if the input asks, a third of the points are removed and added
+// again under new indices, and every query is asked again.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -50,6 +51,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool automatic = data[0] & 8;  // an index that picks its own cell edge
   const std::size_t k = 1 + data[1] % 20;
   const Metric metric = data[2] & 1 ? Metric::Manhattan : Metric::Euclidean;
+  const bool updates = data[2] & 2;         // remove a third of the points and add them back
+  const std::size_t dropped = data[1] % 3;  // which third
   const double radius = kRadii[data[3] % 8];
   const int mode = data[4] % 3;
   data += 5, size -= 5;
@@ -74,28 +77,55 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   pcl::fot::PointIndex index = automatic ? pcl::fot::PointIndex() : pcl::fot::PointIndex(resolution);
   index.build(xyz.data(), points, 3 * sizeof(float));
   if (!(index.resolution() > 0.0 && std::isfinite(index.resolution()))) std::abort();
+  // The points held: their coordinates and indices.
+  std::vector<std::pair<const float*, std::int32_t>> held;
+  for (std::size_t i = 0; i < points; ++i)
+    if (finite3(&xyz[3 * i])) held.emplace_back(&xyz[3 * i], std::int32_t(i));
   std::vector<std::int32_t> ids;
   std::vector<float> ds;
   std::vector<Hit> all;
-  for (std::size_t qi = 0; qi < n; ++qi) {
-    const float* q = &xyz[3 * qi];
-    if (!finite3(q)) {
-      if (index.nearestK(q, k, metric, ids, ds) != 0) std::abort();
-      continue;
+  const auto check = [&] {
+    if (index.size() != held.size()) std::abort();
+    for (std::size_t qi = 0; qi < n; ++qi) {
+      const float* q = &xyz[3 * qi];
+      if (!finite3(q)) {
+        if (index.nearestK(q, k, metric, ids, ds) != 0) std::abort();
+        continue;
+      }
+      all.clear();
+      for (const auto& [p, i] : held) all.push_back(Hit{distance(metric, p, q), i});
+      std::sort(all.begin(), all.end());
+
+      const std::vector<Hit> nearest(all.begin(), all.begin() + std::ptrdiff_t(std::min(k, all.size())));
+      expectSame(nearest, index.nearestK(q, k, metric, ids, ds), ids, ds);
+
+      const double limit = metric == Metric::Euclidean ? radius * radius : radius;
+      std::size_t inside = 0;
+      while (inside < all.size() && double(all[inside].d) <= limit) ++inside;
+      const std::vector<Hit> within(all.begin(), all.begin() + std::ptrdiff_t(inside));
+      expectSame(within, index.radiusSearch(q, radius, metric, ids, ds), ids, ds);
     }
-    all.clear();
-    for (std::size_t i = 0; i < points; ++i)
-      if (finite3(&xyz[3 * i])) all.push_back(Hit{distance(metric, &xyz[3 * i], q), std::int32_t(i)});
-    std::sort(all.begin(), all.end());
-
-    const std::vector<Hit> nearest(all.begin(), all.begin() + std::ptrdiff_t(std::min(k, all.size())));
-    expectSame(nearest, index.nearestK(q, k, metric, ids, ds), ids, ds);
-
-    const double limit = metric == Metric::Euclidean ? radius * radius : radius;
-    std::size_t inside = 0;
-    while (inside < all.size() && double(all[inside].d) <= limit) ++inside;
-    const std::vector<Hit> within(all.begin(), all.begin() + std::ptrdiff_t(inside));
-    expectSame(within, index.radiusSearch(q, radius, metric, ids, ds), ids, ds);
+  };
+  check();
+  if (!updates) return 0;
+  // Updates in place: every third point held goes, then comes back as point `points + i`.
+  std::vector<std::int32_t> gone;
+  std::vector<float> back;
+  std::vector<std::pair<const float*, std::int32_t>> kept;
+  for (std::size_t j = 0; j < held.size(); ++j) {
+    if (j % 3 == dropped) {
+      gone.push_back(held[j].second);
+      back.insert(back.end(), held[j].first, held[j].first + 3);
+    } else {
+      kept.push_back(held[j]);
+    }
   }
+  if (index.remove(gone.data(), gone.size()) != gone.size()) std::abort();
+  held = kept;
+  check();
+  const std::int32_t first = std::int32_t(points);
+  if (index.add(back.data(), gone.size(), 3 * sizeof(float), first) != gone.size()) std::abort();
+  for (std::size_t j = 0; j < gone.size(); ++j) held.emplace_back(&back[3 * j], first + std::int32_t(j));
+  check();
   return 0;
 }
