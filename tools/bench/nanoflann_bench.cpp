@@ -138,9 +138,8 @@ std::string staticRows(const std::vector<Row>& rows, int repeats, std::vector<do
       for (float x : d) s += double(x);
       return s;
     };
-    const Run fot = [&] {
-      Search s;
-      s.setInputCloud(Cloud::ConstPtr(new Cloud(*row.target_cloud)));
+    // Every query of the row on a PCL search (ours or KdTreeFLANN): the sum of the distances found.
+    const auto queryAll = [&](const auto& s) {
       double sum = 0;
       for (const auto& q : row.query_points) {
         if (k > 0)
@@ -151,18 +150,15 @@ std::string staticRows(const std::vector<Row>& rows, int repeats, std::vector<do
       }
       return sum;
     };
+    const Run fot = [&] {
+      Search s;
+      s.setInputCloud(Cloud::ConstPtr(new Cloud(*row.target_cloud)));
+      return queryAll(s);
+    };
     const Run flann = [&] {
       pcl::KdTreeFLANN<pcl::PointXYZ> s;
       s.setInputCloud(row.target_cloud);
-      double sum = 0;
-      for (const auto& q : row.query_points) {
-        if (k > 0)
-          s.nearestKSearch(q, row.k, idx, dist);
-        else
-          s.radiusSearch(q, row.radius, idx, dist);
-        sum += sumOf(dist);
-      }
-      return sum;
+      return queryAll(s);
     };
     // As PCL 1.15's KdTreeNanoflann: leaves of 10 points for 1-NN, of 20 otherwise; float distances.
     const Run nano = [&] {
