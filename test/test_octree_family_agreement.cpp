@@ -46,26 +46,6 @@ void expectSameLeaves(Reference& ref, Ours& ours) {
   EXPECT_TRUE(o == ours.leaf_depth_end());
 }
 
-template <typename Reference, typename Ours>
-void fill(Reference& ref, Ours& ours, const Cloud::Ptr& cloud, std::size_t max_per_leaf = 0) {
-  ref.setInputCloud(cloud);
-  ours.setInputCloud(cloud);
-  if (max_per_leaf) {
-    ref.enableDynamicDepth(max_per_leaf);
-    ours.enableDynamicDepth(max_per_leaf);
-  }
-  ref.addPointsFromInputCloud();
-  ours.addPointsFromInputCloud();
-}
-
-Cloud::Ptr randomCloud(std::size_t n, float side, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.0f, side);
-  Cloud::Ptr cloud(new Cloud);
-  for (std::size_t i = 0; i < n; ++i) cloud->emplace_back(u(rng), u(rng), u(rng));
-  return cloud;
-}
-
 /** Every point four times over, in a few voxels: crowded leaves, duplicates. */
 Cloud::Ptr crowdedCloud() {
   Cloud::Ptr cloud(new Cloud);
@@ -86,13 +66,13 @@ TEST(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
   for (const auto& [cloud, res] :
        {std::make_pair(pcl_fot_test::loadScan("kinect_capture0002.pcd"), 0.02),
         std::make_pair(pcl_fot_test::loadScan("room_scan2.pcd"), 0.05), std::make_pair(crowdedCloud(), 0.004),
-        std::make_pair(randomCloud(3000, 5, 1), 0.1)})
+        std::make_pair(pcl_fot_test::randomCloud(3000, 5, 1), 0.1)})
     for (const std::size_t max_per_leaf : {0, 3, 16}) {
       SCOPED_TRACE(::testing::Message()
                    << cloud->size() << " points at " << res << " m, dynamic depth " << max_per_leaf);
       pcl::octree::OctreePointCloudPointVector<PointXYZ> ref(res);
       pcl::fot::OctreePointCloudPointVector<PointXYZ> ours(res);
-      fill(ref, ours, cloud, max_per_leaf);
+      pcl_fot_test::fillBoth(ref, ours, cloud, max_per_leaf);
       expectSameLeaves(ref, ours);
       // The breadth-first walks visit the same nodes in the same order (leaves of several depths included).
       auto rb = ref.leaf_breadth_begin();
@@ -127,7 +107,7 @@ TEST(OctreeFamilyAgreement, SinglePointKeepsTheLastIndex) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   pcl::octree::OctreePointCloudSinglePoint<PointXYZ> ref(0.05);
   pcl::fot::OctreePointCloudSinglePoint<PointXYZ> ours(0.05);
-  fill(ref, ours, cloud);
+  pcl_fot_test::fillBoth(ref, ours, cloud);
   expectSameLeaves(ref, ours);
 }
 
@@ -136,7 +116,7 @@ TEST(OctreeFamilyAgreement, DensityCountsEveryPoint) {
                                    std::make_pair(crowdedCloud(), 0.004)}) {
     pcl::octree::OctreePointCloudDensity<PointXYZ> ref(res);
     pcl::fot::OctreePointCloudDensity<PointXYZ> ours(res);
-    fill(ref, ours, cloud);
+    pcl_fot_test::fillBoth(ref, ours, cloud);
     ASSERT_EQ(ref.getLeafCount(), ours.getLeafCount());
     std::size_t total = 0;
     for (auto it = ours.leaf_depth_begin(); it != ours.leaf_depth_end(); ++it)
@@ -160,7 +140,7 @@ TEST(OctreeFamilyAgreement, VoxelCentroidsBitForBit) {
                                    std::make_pair(crowdedCloud(), 0.004)}) {
     pcl::octree::OctreePointCloudVoxelCentroid<PointXYZ> ref(res);
     pcl::fot::OctreePointCloudVoxelCentroid<PointXYZ> ours(res);
-    fill(ref, ours, cloud);
+    pcl_fot_test::fillBoth(ref, ours, cloud);
     pcl::octree::OctreePointCloudVoxelCentroid<PointXYZ>::AlignedPointTVector rc;
     pcl::fot::OctreePointCloudVoxelCentroid<PointXYZ>::AlignedPointTVector oc;
     ASSERT_EQ(ref.getVoxelCentroids(rc), ours.getVoxelCentroids(oc));
@@ -199,11 +179,11 @@ TEST(OctreeFamilyAgreement, ChangeDetectorFindsTheSameNewPoints) {
     const auto first = pcl_fot_test::loadScan(a), second = pcl_fot_test::loadScan(b);
     pcl::octree::OctreePointCloudChangeDetector<PointXYZ> ref(res);
     pcl::fot::OctreePointCloudChangeDetector<PointXYZ> ours(res);
-    fill(ref, ours, first);
+    pcl_fot_test::fillBoth(ref, ours, first);
     ref.switchBuffers();
     ours.switchBuffers();
     EXPECT_EQ(ours.getLeafCount(), 0u);
-    fill(ref, ours, second);
+    pcl_fot_test::fillBoth(ref, ours, second);
     // PCL's iterators do not walk a double-buffered octree reliably (they can loop forever): no leaf walk.
     ASSERT_EQ(ref.getLeafCount(), ours.getLeafCount());
     for (const pcl::uindex_t min_points : {0u, 1u, 4u}) {

@@ -81,14 +81,7 @@ struct Octrees {
   Reference ref;
   Ours ours;
   Octrees(const Cloud::ConstPtr& cloud, double res, std::size_t max_per_leaf) : ref(res), ours(res) {
-    ref.setInputCloud(cloud);
-    ours.setInputCloud(cloud);
-    if (max_per_leaf) {
-      ref.enableDynamicDepth(max_per_leaf);
-      ours.enableDynamicDepth(max_per_leaf);
-    }
-    ref.addPointsFromInputCloud();
-    ours.addPointsFromInputCloud();
+    pcl_fot_test::fillBoth(ref, ours, cloud, max_per_leaf);
   }
 };
 
@@ -200,14 +193,6 @@ std::vector<PointXYZ> queriesFor(const Cloud& cloud, double res, std::size_t cou
   return queries;
 }
 
-Cloud::Ptr randomCloud(std::size_t n, float side, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.0f, side);
-  Cloud::Ptr cloud(new Cloud);
-  for (std::size_t i = 0; i < n; ++i) cloud->emplace_back(u(rng), u(rng), u(rng));
-  return cloud;
-}
-
 struct ScanCase {
   std::string scan;
   double resolution;
@@ -242,7 +227,7 @@ INSTANTIATE_TEST_SUITE_P(RealScans, OctreeSearchOnScans,
 
 TEST(OctreeSearchAgreement, RandomClouds) {
   for (unsigned seed = 1; seed <= 6; ++seed) {
-    const auto cloud = randomCloud(2000, 10.0f, seed);
+    const auto cloud = pcl_fot_test::randomCloud(2000, 10.0f, seed);
     for (const std::size_t max_per_leaf : {0, 5})
       expectSameSearches(cloud, 0.3, max_per_leaf, queriesFor(*cloud, 0.3, 60, seed));
   }
@@ -315,7 +300,7 @@ TEST(OctreeSearchAgreement, BadInputGetsAnEmptyAnswer) {
   ours.approxNearestSearch(PointXYZ(0, 0, 0), index, distance);
   EXPECT_EQ(index, -5);
 
-  const auto cloud = randomCloud(100, 1.0f, 9);
+  const auto cloud = pcl_fot_test::randomCloud(100, 1.0f, 9);
   cloud->emplace_back(std::nanf(""), 0.0f, 0.0f);
   ours.setInputCloud(cloud);
   ours.addPointsFromInputCloud();

@@ -13,22 +13,17 @@
 #include <pcl_fot/pcl/octree_point_cloud_change_detector.h>
 #include <pcl_fot/pcl/octree_point_cloud_search.h>
 
+#include "scan_data.h"
+
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace {
-
-Cloud::Ptr randomCloud(std::mt19937& rng, std::size_t n, float side) {
-  std::uniform_real_distribution<float> u(0.0f, side);
-  Cloud::Ptr cloud(new Cloud);
-  for (std::size_t i = 0; i < n; ++i) cloud->emplace_back(u(rng), u(rng), u(rng));
-  return cloud;
-}
 
 /** The search tutorial: a thousand points in a 1024 m cube, 128 m voxels; voxel, k-NN and radius searches. */
 template <template <typename...> class OctreeSearch>
 std::string searchTutorial(unsigned seed) {
   std::mt19937 rng(seed);
-  const Cloud::Ptr cloud = randomCloud(rng, 1000, 1024.0f);
+  const Cloud::Ptr cloud = pcl_fot_test::randomCloud(rng, 1000, 1024.0f);
   OctreeSearch<pcl::PointXYZ> octree(128.0f);
   octree.setInputCloud(cloud);
   octree.addPointsFromInputCloud();
@@ -58,12 +53,12 @@ template <template <typename...> class ChangeDetector>
 std::string changeTutorial(unsigned seed) {
   std::mt19937 rng(seed);
   ChangeDetector<pcl::PointXYZ> octree(32.0f);
-  const Cloud::Ptr before = randomCloud(rng, 128, 64.0f);
+  const Cloud::Ptr before = pcl_fot_test::randomCloud(rng, 128, 64.0f);
   octree.setInputCloud(before);
   octree.addPointsFromInputCloud();
   octree.switchBuffers();
   // The second cloud reaches further, so some of its voxels are new.
-  const Cloud::Ptr after = randomCloud(rng, 128, 96.0f);
+  const Cloud::Ptr after = pcl_fot_test::randomCloud(rng, 128, 96.0f);
   octree.setInputCloud(after);
   octree.addPointsFromInputCloud();
   pcl::Indices fresh;

@@ -6,7 +6,6 @@ namespace detail {
 
 void CellBuckets::clear() {
   slots_.clear();
-  used_ = 0;
   buckets_.clear();
   cell_of_.clear();
   spare_.clear();
@@ -43,11 +42,11 @@ void CellBuckets::erase(std::size_t i) {
     }
   }
   slots_[i].bucket = kFree;
-  --used_;
 }
 
 bool CellBuckets::add(const Key& cell, const float p[3], std::int32_t index) {
-  if (2 * (used_ + 1) > slots_.size()) grow();
+  // The cells held: one per bucket in use.
+  if (2 * (buckets_.size() - spare_.size() + 1) > slots_.size()) grow();
   const std::size_t i = probe(cell);
   const bool fresh = slots_[i].bucket == kFree;
   if (fresh) {
@@ -62,7 +61,6 @@ bool CellBuckets::add(const Key& cell, const float p[3], std::int32_t index) {
     }
     cell_of_[b] = cell;
     slots_[i] = Slot{cell, b};
-    ++used_;
   }
   std::vector<BucketPoint>& bucket = buckets_[slots_[i].bucket];
   if (std::size_t(index) >= where_.size()) where_.resize(std::size_t(index) + 1, kNowhere);

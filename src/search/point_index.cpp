@@ -70,6 +70,18 @@ std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_
   return next;
 }
 
+/**
+ * The least distance PCL could report for a point in the box [lo, hi] from q: the gaps, squared and summed
+ * in the order of pointDistance, whose float steps are each monotone, so no point in the box comes out below
+ * it.
+ */
+inline float boxDistance(Metric metric, const float* lo, const float* hi, const float q[3]) {
+  float gap[3];
+  for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - q[a], q[a] - hi[a], 0.0f});
+  if (metric == Metric::Manhattan) return gap[0] + gap[1] + gap[2];
+  return pointDistance(metric, gap, kOrigin);
+}
+
 using Box = std::array<float, 6>;  // low x, y, z, high x, y, z
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr Box kNoBox = {kInf, kInf, kInf, -kInf, -kInf, -kInf};
@@ -160,10 +172,7 @@ class PointIndex::Policy {
   bool mayImprove(Distance, const TreeCoord&, unsigned, std::size_t word) const {
     if (word == detail::kNoWord || index_.word_box_.empty()) return true;
     const float* box = index_.word_box_[word].data();
-    float gap[3];
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({box[a] - q_[a], q_[a] - box[3 + a], 0.0f});
-    const float d =
-        metric_ == Metric::Manhattan ? gap[0] + gap[1] + gap[2] : pointDistance(metric_, gap, kOrigin);
+    const float d = pcl::fot::boxDistance(metric_, box, box + 3, q_);
     return !(double(d) > bound_);
   }
   bool settled(const TreeCoord& lo, unsigned level) const { return bound_ < exterior(lo, level); }
@@ -284,8 +293,7 @@ class PointIndex::Policy {
   const Hit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
 
   /**
-   * The least distance PCL could report for a point in the box: the gaps, squared and summed in the order of
-   * pointDistance, whose float steps are each monotone, so no point in the box comes out below it.
+   * The least distance PCL could report from this query for a point in the box (see the free boxDistance).
    */
   template <Metric M>
   float boxDistance(const CrowdNode& box) const {
@@ -293,10 +301,7 @@ class PointIndex::Policy {
   }
   template <Metric M>
   float boxDistance(const float* lo, const float* hi) const {
-    float gap[3];
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - q_[a], q_[a] - hi[a], 0.0f});
-    if (M == Metric::Manhattan) return gap[0] + gap[1] + gap[2];
-    return pointDistance(M, gap, kOrigin);
+    return pcl::fot::boxDistance(M, lo, hi, q_);
   }
 
   /** The distance PCL would report for the point in slot i, kept if it is within the bound. */

@@ -68,7 +68,6 @@ class CellBuckets {
   void erase(std::size_t i);
 
   std::vector<Slot> slots_;  // a power of two, at most half full
-  std::size_t used_ = 0;
   std::vector<std::vector<BucketPoint>> buckets_;
   std::vector<Key> cell_of_;          // by bucket
   std::vector<std::uint32_t> spare_;  // buckets no cell uses, kept for the next new cell
