@@ -12,7 +12,7 @@
 #include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
 #include <pcl/octree/octree_pointcloud_occupancy.h>
 
-#include <pcl_fot/pcl/octree_point_cloud.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud.h>
 
 namespace {
 

@@ -51,7 +51,7 @@ tool_test(Hostile.FloatRange.PsiTransform COMMAND $<TARGET_FILE:fot_psi> "${h}/c
 
 # 4. ψ of nothing, or of a remnant, is no score.
 tool_test(Hostile.PsiOfNothing.EveryPointDropped COMMAND $<TARGET_FILE:fot_psi> "${data}/room_scan1.pcd"
-          "${data}/room_scan2.pcd" -res 1e-9 EXIT 2 MATCH "keeps [0-9]+ of its 112586 finite points")
+          "${data}/room_scan2.pcd" -res 1e-9 EXIT 2 MATCH "keeps [0-9]+ of its [0-9]+ finite points")
 tool_test(Hostile.PsiOfNothing.AnEmptyCloud COMMAND $<TARGET_FILE:fot_psi> "${runs}/empty.pcd" "${h}/c.pcd"
           EXIT 2 ONE_LINE_ERROR MATCH "has no occupied cell: there is nothing to compare")
 # CMake drops empty arguments from a command: a shell passes them.

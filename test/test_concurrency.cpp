@@ -12,7 +12,8 @@
 #include <pcl_fot/detail/worker_threads.h>
 #include <pcl_fot/mapping/cast_ray.h>
 #include <pcl_fot/pcl/cloud_insertion.h>
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 #include <pcl_fot/psi/psi.h>
 #include <pcl_fot/search/nearest_cell_search.h>
 #include <pcl_fot/tree/accessor.h>
@@ -26,12 +27,11 @@ namespace {
 constexpr unsigned kThreads = 4;
 
 const FastOctTree& roomMap() {
-  static const FastOctTree map = [] {
+  return pcl_fot_test::perScanSet<FastOctTree>([] {
     FastOctTree t(0.05);
     insertScan(t, *pcl_fot_test::loadScan("room_scan1.pcd"));
     return t;
-  }();
-  return map;
+  });
 }
 
 std::vector<Key> queryKeys(std::size_t n, unsigned seed) {
@@ -59,7 +59,9 @@ void together(Body&& body) {
 
 }  // namespace
 
-TEST(Concurrency, CellReadsNearestCellsAndRayCasts) {
+PCL_FOT_SCAN_TESTS(Concurrency);
+
+TEST_P(Concurrency, CellReadsNearestCellsAndRayCasts) {
   const FastOctTree& map = roomMap();
   const std::vector<Key> keys = queryKeys(20000, 1);
   std::vector<CellState> states;
@@ -100,7 +102,7 @@ TEST(Concurrency, CellReadsNearestCellsAndRayCasts) {
   });
 }
 
-TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
+TEST_P(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
   const FastOctTree& a = roomMap();
   FastOctTree b(0.05);
   insertScan(b, *pcl_fot_test::loadScan("room_scan2.pcd"));
@@ -158,7 +160,7 @@ TEST(Concurrency, PsiAndBatchSearchesMatchTheSerialPath) {
   });
 }
 
-TEST(Concurrency, SearchQueriesBetweenUpdates) {
+TEST_P(Concurrency, SearchQueriesBetweenUpdates) {
   // Queries from many threads at once, then an update alone, in turn: a sliding window of a room scan.
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   pcl::PointCloud<pcl::PointXYZ> frames[4];
@@ -186,7 +188,53 @@ TEST(Concurrency, SearchQueriesBetweenUpdates) {
   }
 }
 
-TEST(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {
+TEST_P(Concurrency, OctreeLookAlikeSearchesFromManyThreads) {
+  // The first queries build the octree's point and branch indices: threads race to them.
+  const auto scan = pcl_fot_test::loadScan("room_scan2.pcd");
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (std::size_t i = 0; i < scan->size(); i += 4) cloud->push_back((*scan)[i]);
+  struct Answer {
+    pcl::Indices knn, radius;
+    pcl::index_t approx;
+    bool operator==(const Answer& o) const {
+      return knn == o.knn && radius == o.radius && approx == o.approx;
+    }
+  };
+  const auto ask = [](const OctreePointCloudSearch<pcl::PointXYZ>& octree, const pcl::PointXYZ& q) {
+    Answer a;
+    std::vector<float> d;
+    float approx_distance;
+    octree.nearestKSearch(q, 5, a.knn, d);
+    octree.radiusSearch(q, 0.2, a.radius, d);
+    octree.approxNearestSearch(q, a.approx, approx_distance);
+    return a;
+  };
+  const auto fill = [&](OctreePointCloudSearch<pcl::PointXYZ>& octree) {
+    octree.setInputCloud(cloud);
+    octree.addPointsFromInputCloud();
+  };
+  OctreePointCloudSearch<pcl::PointXYZ> serial_octree(0.1), shared(0.1);
+  fill(serial_octree);
+  fill(shared);
+  std::vector<Answer> serial;
+  for (std::size_t i = 0; i < cloud->size(); i += 13) serial.push_back(ask(serial_octree, (*cloud)[i]));
+  together([&](unsigned t) {
+    for (std::size_t i = 13 * t; i < cloud->size(); i += 13 * kThreads)
+      ASSERT_TRUE(ask(shared, (*cloud)[i]) == serial[i / 13]) << "query " << i;
+  });
+  // Leaf walks from many threads share the branch index.
+  std::size_t leaves = 0;
+  for (auto it = serial_octree.leaf_depth_begin(); it != serial_octree.leaf_depth_end(); ++it) ++leaves;
+  OctreePointCloudSearch<pcl::PointXYZ> walked(0.1);
+  fill(walked);
+  together([&](unsigned) {
+    std::size_t n = 0;
+    for (auto it = walked.leaf_depth_begin(); it != walked.leaf_depth_end(); ++it) ++n;
+    ASSERT_EQ(n, leaves);
+  });
+}
+
+TEST_P(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {
   const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
   EXPECT_EQ(detail::workerCount(0, 1000), std::min<std::size_t>(hardware, 1000));
   EXPECT_EQ(detail::workerCount(4'000'000'000u, 1'000'000'000), 4 * hardware);

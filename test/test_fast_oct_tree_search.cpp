@@ -11,7 +11,7 @@
 #include <pcl/search/brute_force.h>
 #include <flann/flann.hpp>
 
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 
 #include "scan_data.h"
 
@@ -74,16 +74,18 @@ void expectSameAsFlann(const std::string& target_name, const std::string& query_
     ASSERT_EQ(flann_l1.nearest(q), db[0]) << "L1 1-NN";
     ++compared;
   }
-  EXPECT_GT(compared, 100000u);
+  EXPECT_GT(compared, queries->size() / 2) << "most points are finite, and each was compared";
 }
 
 }  // namespace
 
-TEST(FastOctTreeSearch, SameDistancesAsFlannForEveryKinectPoint) {
+PCL_FOT_SCAN_TESTS(FastOctTreeSearchOnScans);
+
+TEST_P(FastOctTreeSearchOnScans, SameDistancesAsFlannForEveryKinectPoint) {
   expectSameAsFlann("kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02);
 }
 
-TEST(FastOctTreeSearch, SameDistancesAsFlannOnTheRoomScans) {
+TEST_P(FastOctTreeSearchOnScans, SameDistancesAsFlannOnTheRoomScans) {
   expectSameAsFlann("room_scan1.pcd", "room_scan2.pcd", 0.1);
 }
 
@@ -101,7 +103,7 @@ std::vector<float> flannDistances(const Cloud& cloud, const PointXYZ& q, const p
   return d;
 }
 
-TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
+TEST_P(FastOctTreeSearchOnScans, KnnAndRadiusEqualBruteForce) {
   const Cloud::Ptr target = pcl_fot_test::loadScan("kinect_capture0003.pcd");
   const Cloud::Ptr queries = pcl_fot_test::loadScan("kinect_capture0001.pcd");
   pcl::search::BruteForce<PointXYZ> brute(true);
@@ -112,7 +114,7 @@ TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
     pcl::Indices a, b;
     std::vector<float> da, db;
     std::size_t n = 0;
-    for (std::size_t i = 0; i < queries->size(); i += 997) {
+    for (std::size_t i = 0; i < queries->size(); i += queries->size() / 300) {
       const PointXYZ& q = (*queries)[i];
       if (!pcl::isFinite(q)) continue;
       ASSERT_EQ(brute.nearestKSearch(q, 12, a, da), ours.nearestKSearch(q, 12, b, db));
@@ -126,7 +128,7 @@ TEST(FastOctTreeSearch, KnnAndRadiusEqualBruteForce) {
       ASSERT_EQ(std::vector<float>(all.begin(), all.begin() + 5), db);
       ++n;
     }
-    EXPECT_GT(n, 200u);
+    EXPECT_GT(n, 200u) << "most of the 300 sampled points are finite";
   }
 }
 
@@ -217,7 +219,7 @@ TEST(FastOctTreeSearch, APileOfEqualPointsGivesItsSmallestIndicesFirst) {
     }
 }
 
-TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
+TEST_P(FastOctTreeSearchOnScans, KeepsPclsSearchContract) {
   const Cloud::Ptr cloud = pcl_fot_test::loadScan("kinect_capture0002.pcd");  // organised: NaN points
   auto subset = std::make_shared<pcl::Indices>();
   for (pcl::index_t i = 0; i < pcl::index_t(cloud->size()); i += 3) subset->push_back(i);
@@ -263,7 +265,7 @@ TEST(FastOctTreeSearch, KeepsPclsSearchContract) {
   EXPECT_EQ((*cloud)[b[0]].getVector3fMap(), (*cloud)[(*subset)[at]].getVector3fMap());
 }
 
-TEST(FastOctTreeSearch, RepeatedInputIsCheapAndChangesAreSeen) {
+TEST_P(FastOctTreeSearchOnScans, RepeatedInputIsCheapAndChangesAreSeen) {
   Cloud::Ptr cloud(new Cloud(*pcl_fot_test::loadScan("room_scan1.pcd")));
   Search ours(0.1);
   ours.setInputCloud(cloud);
@@ -385,7 +387,7 @@ void expectBruteForceAnswers(const Search& ours, const Cloud::Ptr& cloud, std::s
   }
 }
 
-TEST(FastOctTreeSearch, TheDefaultPicksCellsOfAboutEightPointsForAnyCloud) {
+TEST_P(FastOctTreeSearchOnScans, TheDefaultPicksCellsOfAboutEightPointsForAnyCloud) {
   const std::vector<std::pair<std::string, Cloud::Ptr>> clouds = {
       {"LiDAR in a ring wall", lidarInARing()},
       {"dense LiDAR sweep", denseLidarSweep()},

@@ -27,12 +27,11 @@ namespace {
 
 /** room_scan1 ray-traced at 5 cm: free space in collapsed regions of many sizes, and occupied walls. */
 const FastOctTree& realMap() {
-  static const FastOctTree map = [] {
+  return pcl_fot_test::perScanSet<FastOctTree>([] {
     FastOctTree t(0.05);
     insertScan(t, *pcl_fot_test::loadScan("room_scan1.pcd"));
     return t;
-  }();
-  return map;
+  });
 }
 
 std::string tempPath(const std::string& name) {
@@ -70,7 +69,9 @@ void expectRejected(const std::string& bytes, const std::string& why) {
 
 }  // namespace
 
-TEST(FotFile, RoundTripIsBitIdentical) {
+PCL_FOT_SCAN_TESTS(FotFileOnScans);
+
+TEST_P(FotFileOnScans, RoundTripIsBitIdentical) {
   const FastOctTree& map = realMap();
   ASSERT_GT(map.getFreeCount(), 0u);
   const std::string bytes = io::encodeFot(map);
@@ -202,7 +203,7 @@ FastOctTree logOddsMap() {
   return t;
 }
 
-TEST(FotFile, LogOddsRuleModelAndValuesRoundTrip) {
+TEST_P(FotFileOnScans, LogOddsRuleModelAndValuesRoundTrip) {
   const FastOctTree map = logOddsMap();
   ASSERT_GT(map.getUnsettledCount(), 10000u);
   const std::string bytes = io::encodeFot(map);
@@ -257,7 +258,7 @@ TEST(FotFile, FilesOfVersionTwoLoadAsBinaryMaps) {
   EXPECT_TRUE(io::decodeFot(v3.data(), v3.size()) == t);
 }
 
-TEST(FotFile, ThousandsOfDamagedFilesFailCleanlyOrLoadValidMaps) {
+TEST_P(FotFileOnScans, ThousandsOfDamagedFilesFailCleanlyOrLoadValidMaps) {
   const std::string good = io::encodeFot(realMap());
   std::mt19937 rng(2007);
   int refused = 0, loaded = 0;

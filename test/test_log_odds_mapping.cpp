@@ -133,23 +133,25 @@ Sequence movingObject() {
   return scans;
 }
 
-TEST(LogOddsMapping, RoomPairAtTheNdtTutorialsGuessEqualsOctoMap) {
+PCL_FOT_SCAN_TESTS(LogOddsMappingOnScans);
+
+TEST_P(LogOddsMappingOnScans, RoomPairAtTheNdtTutorialsGuessEqualsOctoMap) {
   expectSameAsOctoMap(roomPair(), 0.05);
 }
 
-TEST(LogOddsMapping, RoomPairWithAMaximumRangeEqualsOctoMap) {
+TEST_P(LogOddsMappingOnScans, RoomPairWithAMaximumRangeEqualsOctoMap) {
   const Sequence scans = roomPair();
   expectSameLogOdds(octomapOf(scans, 0.1, false, 3.0), oursOf(scans, 0.1, true, false, 3.0));
 }
 
-TEST(LogOddsMapping, ThreeKinectFramesEqualOctoMap) {
+TEST_P(LogOddsMappingOnScans, ThreeKinectFramesEqualOctoMap) {
   Sequence scans;
   for (const char* name : {"kinect_capture0001.pcd", "kinect_capture0002.pcd", "kinect_capture0003.pcd"})
     scans.push_back(placed(*pcl_fot_test::loadScan(name), Eigen::Affine3f::Identity()));
   expectSameAsOctoMap(scans, 0.02);
 }
 
-TEST(LogOddsMapping, ThreeKinectFramesDiscretizedEqualOctoMap) {
+TEST_P(LogOddsMappingOnScans, ThreeKinectFramesDiscretizedEqualOctoMap) {
   Sequence scans;
   for (const char* name : {"kinect_capture0001.pcd", "kinect_capture0002.pcd", "kinect_capture0003.pcd"})
     scans.push_back(placed(*pcl_fot_test::loadScan(name), Eigen::Affine3f::Identity()));
@@ -166,7 +168,7 @@ TEST(LogOddsMapping, EmbeddedSyntheticRoomEqualsOctoMap) {
   expectSameAsOctoMap(scans, 0.05);
 }
 
-TEST(LogOddsMapping, OneScanRepeatedUntilItClampsEqualsOctoMap) {
+TEST_P(LogOddsMappingOnScans, OneScanRepeatedUntilItClampsEqualsOctoMap) {
   const Scan once = placed(*pcl_fot_test::loadScan("room_scan1.pcd"), Eigen::Affine3f::Identity());
   const Sequence scans(7, once);
   expectSameAsOctoMap(scans, 0.1);
@@ -202,7 +204,7 @@ TEST(LogOddsMapping, BinaryRuleStaysTheLatestScanPerMapOrPerCall) {
   EXPECT_EQ(per_map.getLogOdds(Key{80, 0, 0}), SensorModel().clampMaxLogOdds()) << "the wall, settled";
 }
 
-TEST(LogOddsMapping, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {
+TEST_P(LogOddsMappingOnScans, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {
   const Sequence scans = roomPair();
   FastOctTree merged = oursOf({scans[0]}, 0.05, true, false);
   merged.merge(oursOf({scans[1]}, 0.05, true, false));
@@ -228,7 +230,9 @@ TEST(LogOddsMapping, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {
   EXPECT_TRUE(merged == before);
 }
 
-TEST(LogOddsFiles, OtRoundTripsThroughOctoMapKeepEveryValue) {
+PCL_FOT_SCAN_TESTS(LogOddsFilesOnScans);
+
+TEST_P(LogOddsFilesOnScans, OtRoundTripsThroughOctoMapKeepEveryValue) {
   const Sequence scans = roomPair();
   const FastOctTree ours = oursOf(scans, 0.05, true, false);
   // Ours written, OctoMap reads the same value in every leaf.

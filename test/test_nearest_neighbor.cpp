@@ -109,7 +109,9 @@ TEST(NearestCellSearch, RandomClustersWithCollapsedCubes) {
   checkQueries(tree, CellState::Free, queries);
 }
 
-TEST(NearestCellSearch, RealScansInSpatialOrder) {
+PCL_FOT_SCAN_TESTS(NearestCellSearchOnScans);
+
+TEST_P(NearestCellSearchOnScans, RealScansInSpatialOrder) {
   const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
@@ -198,7 +200,7 @@ TEST(NearestCellSearch, BatchAnswersAsSingleQueries) {
   EXPECT_EQ(none.nearest(queries, got), 0u) << "an empty map answers no query";
 }
 
-TEST(NearestCellSearch, BatchOnRealScans) {
+TEST_P(NearestCellSearchOnScans, BatchOnRealScans) {
   const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));

@@ -19,8 +19,8 @@ using namespace pcl::fot;
 namespace {
 
 const pcl::PointCloud<pcl::PointXYZ>& roomScan() {
-  static const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
-  return *cloud;
+  return *pcl_fot_test::perScanSet<pcl::PointCloud<pcl::PointXYZ>::Ptr>(
+      [] { return pcl_fot_test::loadScan("room_scan1.pcd"); });
 }
 
 /** room_scan1 ray-traced at 5 cm on the given grid. */
@@ -39,7 +39,9 @@ std::unique_ptr<octomap::OcTree> readWithOctoMap(const std::string& bt) {
 
 }  // namespace
 
-TEST(OctoMapBt, ExportedMapsLoadInOctoMapWithOurCells) {
+PCL_FOT_SCAN_TESTS(OctoMapBtOnScans);
+
+TEST_P(OctoMapBtOnScans, ExportedMapsLoadInOctoMapWithOurCells) {
   for (const CellGrid& grid : {CellGrid(0.05), CellGrid(0.05, 0.15, -0.1, 2.0)}) {
     const FastOctTree ours = ourMap(grid);
     ASSERT_GT(ours.getFreeCount(), 100000u);
@@ -49,7 +51,7 @@ TEST(OctoMapBt, ExportedMapsLoadInOctoMapWithOurCells) {
   }
 }
 
-TEST(OctoMapBt, ImportedOctoMapsHaveOctoMapsCells) {
+TEST_P(OctoMapBtOnScans, ImportedOctoMapsHaveOctoMapsCells) {
   octomap::OcTree om(0.05);
   octomap::Pointcloud scan;
   for (const auto& p : roomScan()) scan.push_back(p.x, p.y, p.z);
@@ -87,7 +89,7 @@ TEST(OctoMapBt, PrunedCubesFarFromTheOriginImport) {
   expectSameCells(om, io::decodeBt(bt.data(), bt.size(), "cube.bt"));
 }
 
-TEST(OctoMapBt, EveryOccupancyTreeTypeImports) {
+TEST_P(OctoMapBtOnScans, EveryOccupancyTreeTypeImports) {
   // ColorOcTree and OcTreeStamped write the same .bt body under their own id; OctoMap reads them as OcTrees.
   auto check = [](auto& om) {
     octomap::Pointcloud scan;
@@ -105,7 +107,7 @@ TEST(OctoMapBt, EveryOccupancyTreeTypeImports) {
   check(stamped);
 }
 
-TEST(OctoMapBt, RoundTripAndEmptyMaps) {
+TEST_P(OctoMapBtOnScans, RoundTripAndEmptyMaps) {
   const FastOctTree ours = ourMap(CellGrid(0.05));
   const std::string bt = io::encodeBt(ours);
   EXPECT_TRUE(io::decodeBt(bt.data(), bt.size()) == ours);
@@ -115,7 +117,7 @@ TEST(OctoMapBt, RoundTripAndEmptyMaps) {
   EXPECT_TRUE(io::decodeBt(e.data(), e.size()).empty());
 }
 
-TEST(OctoMapBt, WhatOctoMapCannotHoldIsRefused) {
+TEST_P(OctoMapBtOnScans, WhatOctoMapCannotHoldIsRefused) {
   FastOctTree off(0.05, 0.01, 0.0, 0.0);  // boundaries off OctoMap's grid
   off.setCell({1, 2, 3}, CellState::Occupied);
   EXPECT_THROW(io::encodeBt(off), std::invalid_argument);
@@ -128,7 +130,7 @@ TEST(OctoMapBt, WhatOctoMapCannotHoldIsRefused) {
   EXPECT_THROW(io::decodeBt(bt.data(), bt.size(), "x.bt", off_grid), std::invalid_argument);
 }
 
-TEST(OctoMapBt, DamagedFilesFailCleanlyOrLoadValidMaps) {
+TEST_P(OctoMapBtOnScans, DamagedFilesFailCleanlyOrLoadValidMaps) {
   const std::string good = io::encodeBt(ourMap(CellGrid(0.2)));  // coarse, so that 1000 variants stay quick
   const std::size_t body = good.find("data\n") + 5;
   io::OctoMapImportOptions capped;

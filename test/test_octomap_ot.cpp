@@ -21,7 +21,8 @@ namespace {
 /** room_scan1 ray-traced into an OctoMap tree: log-odds of every kind, from many updates. */
 template <typename OctoMapTree>
 void mapRoom(OctoMapTree& om) {
-  static const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  const auto& cloud = pcl_fot_test::perScanSet<pcl::PointCloud<pcl::PointXYZ>::Ptr>(
+      [] { return pcl_fot_test::loadScan("room_scan1.pcd"); });
   octomap::Pointcloud scan;
   for (const auto& p : *cloud) scan.push_back(p.x, p.y, p.z);
   om.insertPointCloud(scan, octomap::point3d(0, 0, 0));
@@ -37,7 +38,9 @@ std::string ot(const OctoMapTree& om) {
 
 }  // namespace
 
-TEST(OctoMapOt, EveryLeafIsOctoMapsState) {
+PCL_FOT_SCAN_TESTS(OctoMapOt);
+
+TEST_P(OctoMapOt, EveryLeafIsOctoMapsState) {
   octomap::OcTree om(0.05);
   mapRoom(om);
   const std::string bytes = ot(om);
@@ -57,7 +60,7 @@ TEST(OctoMapOt, EveryLeafIsOctoMapsState) {
   expectSameCells(om, io::decodeOt(bytes.data(), bytes.size(), "room.ot", shifted));
 }
 
-TEST(OctoMapOt, ColourAndStampedTrees) {
+TEST_P(OctoMapOt, ColourAndStampedTrees) {
   octomap::ColorOcTree color(0.1);
   mapRoom(color);
   color.updateNode(octomap::point3d(1, 1, 1), true)->setColor(10, 20, 30);
@@ -69,7 +72,7 @@ TEST(OctoMapOt, ColourAndStampedTrees) {
   expectSameCells(stamped, io::decodeOt(s.data(), s.size(), "stamped.ot"));
 }
 
-TEST(OctoMapOt, EmptyTreesAndWhatCannotBeRead) {
+TEST_P(OctoMapOt, EmptyTreesAndWhatCannotBeRead) {
   const octomap::OcTree empty(0.1);
   const std::string e = ot(empty);
   EXPECT_TRUE(io::decodeOt(e.data(), e.size()).empty());
@@ -104,7 +107,7 @@ TEST(OctoMapOt, EmptyTreesAndWhatCannotBeRead) {
   refused("# Octomap OcTree binary file\nid OcTree\nsize 0\nres 0.1\ndata\n", "does not start with");
 }
 
-TEST(OctoMapOt, DamagedFilesFailCleanlyOrLoadValidMaps) {
+TEST_P(OctoMapOt, DamagedFilesFailCleanlyOrLoadValidMaps) {
   octomap::OcTree om(0.2);
   mapRoom(om);
   const std::string good = ot(om);

@@ -15,7 +15,7 @@
 #include <pcl/octree/octree_pointcloud_singlepoint.h>
 #include <pcl/octree/octree_pointcloud_voxelcentroid.h>
 
-#include <pcl_fot/pcl/octree.h>
+#include <pcl_fot/pcl/octree/octree.h>
 
 #include "scan_data.h"
 
@@ -62,7 +62,9 @@ bool insideBox(const pcl::octree::OctreePointCloud<PointXYZ>& t, const PointXYZ&
 
 }  // namespace
 
-TEST(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
+PCL_FOT_SCAN_TESTS(OctreeFamilyAgreement);
+
+TEST_P(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
   for (const auto& [cloud, res] :
        {std::make_pair(pcl_fot_test::loadScan("kinect_capture0002.pcd"), 0.02),
         std::make_pair(pcl_fot_test::loadScan("room_scan2.pcd"), 0.05), std::make_pair(crowdedCloud(), 0.004),
@@ -103,7 +105,7 @@ TEST(OctreeFamilyAgreement, PointVectorLeavesOnScansAndCrowds) {
     }
 }
 
-TEST(OctreeFamilyAgreement, SinglePointKeepsTheLastIndex) {
+TEST_P(OctreeFamilyAgreement, SinglePointKeepsTheLastIndex) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   pcl::octree::OctreePointCloudSinglePoint<PointXYZ> ref(0.05);
   pcl::fot::OctreePointCloudSinglePoint<PointXYZ> ours(0.05);
@@ -111,7 +113,7 @@ TEST(OctreeFamilyAgreement, SinglePointKeepsTheLastIndex) {
   expectSameLeaves(ref, ours);
 }
 
-TEST(OctreeFamilyAgreement, DensityCountsEveryPoint) {
+TEST_P(OctreeFamilyAgreement, DensityCountsEveryPoint) {
   for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("kinect_capture0003.pcd"), 0.05),
                                    std::make_pair(crowdedCloud(), 0.004)}) {
     pcl::octree::OctreePointCloudDensity<PointXYZ> ref(res);
@@ -134,7 +136,7 @@ TEST(OctreeFamilyAgreement, DensityCountsEveryPoint) {
   }
 }
 
-TEST(OctreeFamilyAgreement, VoxelCentroidsBitForBit) {
+TEST_P(OctreeFamilyAgreement, VoxelCentroidsBitForBit) {
   for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("room_scan1.pcd"), 0.1),
                                    std::make_pair(pcl_fot_test::loadScan("terrain_samp11.pcd"), 1.0),
                                    std::make_pair(crowdedCloud(), 0.004)}) {
@@ -171,7 +173,7 @@ TEST(OctreeFamilyAgreement, VoxelCentroidsBitForBit) {
   }
 }
 
-TEST(OctreeFamilyAgreement, ChangeDetectorFindsTheSameNewPoints) {
+TEST_P(OctreeFamilyAgreement, ChangeDetectorFindsTheSameNewPoints) {
   // Two Kinect frames of one scene, and two room scans: the second cloud against the first.
   for (const auto& [a, b, res] :
        {std::make_tuple(std::string("kinect_capture0001.pcd"), std::string("kinect_capture0002.pcd"), 0.02),
@@ -196,7 +198,7 @@ TEST(OctreeFamilyAgreement, ChangeDetectorFindsTheSameNewPoints) {
   }
 }
 
-TEST(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
+TEST_P(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
   for (const auto& [cloud, res] : {std::make_pair(pcl_fot_test::loadScan("room_scan1.pcd"), 0.05),
                                    std::make_pair(pcl_fot_test::loadScan("kinect_capture0001.pcd"), 0.01)}) {
     pcl::octree::OctreePointCloudAdjacency<PointXYZ> ref(res);

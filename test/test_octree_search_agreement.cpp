@@ -10,7 +10,7 @@
 #include <pcl/common/point_tests.h>
 #include <pcl/octree/octree_search.h>
 
-#include <pcl_fot/pcl/octree_point_cloud_search.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
 
 #include "scan_data.h"
 
@@ -198,13 +198,30 @@ struct ScanCase {
   double resolution;
   std::size_t max_per_leaf;
   bool pcl_exact;  // false where PCL's float voxel centres are too coarse (UTM coordinates)
+  pcl_fot_test::ScanSet set;
 };
 
 void PrintTo(const ScanCase& c, std::ostream* os) {
   *os << c.scan << " at " << c.resolution << " m, dynamic depth " << c.max_per_leaf;
 }
 
-class OctreeSearchOnScans : public ::testing::TestWithParam<ScanCase> {};
+class OctreeSearchOnScans : public ::testing::TestWithParam<ScanCase> {
+  void SetUp() override {
+    if (!pcl_fot_test::useScans(GetParam().set)) GTEST_SKIP() << pcl_fot_test::missingScansMessage();
+  }
+};
+
+std::vector<ScanCase> scanCases(pcl_fot_test::ScanSet set) {
+  return {{"kinect_capture0001.pcd", 0.02, 0, true, set},
+          {"room_scan1.pcd", 0.05, 0, true, set},
+          {"room_scan1.pcd", 0.01, 8, true, set},
+          {"terrain_samp11.pcd", 0.5, 0, false, set}};
+}
+
+std::string scanCaseName(const ::testing::TestParamInfo<ScanCase>& info) {
+  return info.param.scan.substr(0, info.param.scan.find('.')) + (info.param.max_per_leaf ? "_dynamic" : "") +
+         "_" + std::to_string(info.index);
+}
 
 }  // namespace
 
@@ -214,16 +231,10 @@ TEST_P(OctreeSearchOnScans, SameAnswersAsPcl) {
                      queriesFor(*cloud, GetParam().resolution, 150, 5), GetParam().pcl_exact);
 }
 
-INSTANTIATE_TEST_SUITE_P(RealScans, OctreeSearchOnScans,
-                         ::testing::Values(ScanCase{"kinect_capture0001.pcd", 0.02, 0, true},
-                                           ScanCase{"room_scan1.pcd", 0.05, 0, true},
-                                           ScanCase{"room_scan1.pcd", 0.01, 8, true},
-                                           ScanCase{"terrain_samp11.pcd", 0.5, 0, false}),
-                         [](const ::testing::TestParamInfo<ScanCase>& info) {
-                           return info.param.scan.substr(0, info.param.scan.find('.')) +
-                                  (info.param.max_per_leaf ? "_dynamic" : "") + "_" +
-                                  std::to_string(info.index);
-                         });
+INSTANTIATE_TEST_SUITE_P(Synthetic, OctreeSearchOnScans,
+                         ::testing::ValuesIn(scanCases(pcl_fot_test::ScanSet::Synthetic)), scanCaseName);
+INSTANTIATE_TEST_SUITE_P(Real, OctreeSearchOnScans,
+                         ::testing::ValuesIn(scanCases(pcl_fot_test::ScanSet::Real)), scanCaseName);
 
 TEST(OctreeSearchAgreement, RandomClouds) {
   for (unsigned seed = 1; seed <= 6; ++seed) {
@@ -249,7 +260,9 @@ TEST(OctreeSearchAgreement, CrowdedVoxelsDuplicatesAndTies) {
   expectSameSearches(cloud, 0.005, 4, queries);
 }
 
-TEST(OctreeSearchAgreement, RayIndicesAreTheVoxelsPointsInRayOrder) {
+PCL_FOT_SCAN_TESTS(OctreeSearchAgreementOnScans);
+
+TEST_P(OctreeSearchAgreementOnScans, RayIndicesAreTheVoxelsPointsInRayOrder) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   Octrees t(cloud, 0.05, 0);
   std::mt19937 rng(3);

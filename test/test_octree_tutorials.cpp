@@ -10,8 +10,8 @@
 #include <pcl/octree/octree_pointcloud_changedetector.h>
 #include <pcl/octree/octree_search.h>
 
-#include <pcl_fot/pcl/octree_point_cloud_change_detector.h>
-#include <pcl_fot/pcl/octree_point_cloud_search.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_change_detector.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
 
 #include "scan_data.h"
 

@@ -1,4 +1,4 @@
-// The occupied voxel set of a FastOctTree equals pcl::octree's on the real scans.
+// The occupied voxel set of a FastOctTree equals pcl::octree's on the scans.
 #include <gtest/gtest.h>
 
 #include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
@@ -16,13 +16,18 @@ namespace {
 struct Case {
   std::string scan;
   double resolution;
+  pcl_fot_test::ScanSet set;
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
   *os << c.scan << " at " << c.resolution << " m";
 }
 
-class PclOccupancyAgreement : public ::testing::TestWithParam<Case> {};
+class PclOccupancyAgreement : public ::testing::TestWithParam<Case> {
+  void SetUp() override {
+    if (!pcl_fot_test::useScans(GetParam().set)) GTEST_SKIP() << pcl_fot_test::missingScansMessage();
+  }
+};
 
 }  // namespace
 
@@ -56,15 +61,19 @@ TEST_P(PclOccupancyAgreement, SameOccupiedVoxels) {
   EXPECT_EQ(leaves, reference.getLeafCount());
 }
 
-std::vector<Case> allCases() {
+std::vector<Case> allCases(pcl_fot_test::ScanSet set) {
   std::vector<Case> cases;
   for (const auto& scan : pcl_fot_test::allScans())
-    for (double res : {0.01, 0.05}) cases.push_back({scan, res});
+    for (double res : {0.01, 0.05}) cases.push_back({scan, res, set});
   return cases;
 }
 
-INSTANTIATE_TEST_SUITE_P(RealScans, PclOccupancyAgreement, ::testing::ValuesIn(allCases()),
-                         [](const ::testing::TestParamInfo<Case>& info) {
-                           std::string name = info.param.scan.substr(0, info.param.scan.find('.'));
-                           return name + (info.param.resolution == 0.01 ? "_1cm" : "_5cm");
-                         });
+std::string caseName(const ::testing::TestParamInfo<Case>& info) {
+  std::string name = info.param.scan.substr(0, info.param.scan.find('.'));
+  return name + (info.param.resolution == 0.01 ? "_1cm" : "_5cm");
+}
+
+INSTANTIATE_TEST_SUITE_P(Synthetic, PclOccupancyAgreement,
+                         ::testing::ValuesIn(allCases(pcl_fot_test::ScanSet::Synthetic)), caseName);
+INSTANTIATE_TEST_SUITE_P(Real, PclOccupancyAgreement,
+                         ::testing::ValuesIn(allCases(pcl_fot_test::ScanSet::Real)), caseName);

@@ -154,7 +154,9 @@ TEST(Psi, CellsFarFromTheOtherMapAgreeWithBruteForce) {
   }
 }
 
-TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
+PCL_FOT_SCAN_TESTS(PsiOnScans);
+
+TEST_P(PsiOnScans, TreesAndDistanceMapsAgreeOnRealScans) {
   struct Case {
     const char* a;
     const char* b;
@@ -190,7 +192,7 @@ TEST(Psi, TreesAndDistanceMapsAgreeOnRealScans) {
   }
 }
 
-TEST(Psi, ZeroForEqualMapsAndSymmetric) {
+TEST_P(PsiOnScans, ZeroForEqualMapsAndSymmetric) {
   const CellGrid grid(0.05);
   FastOctTree a(grid), b(grid);
   insertPointCloud(a, *pcl_fot_test::loadScan("room_scan1.pcd"));
@@ -204,7 +206,7 @@ TEST(Psi, ZeroForEqualMapsAndSymmetric) {
   EXPECT_DOUBLE_EQ(ab.mean(), double(ab.sum) / double(ab.cells));
 }
 
-TEST(Psi, GrowsAsAScanIsShiftedFromItself) {
+TEST_P(PsiOnScans, GrowsAsAScanIsShiftedFromItself) {
   const auto cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
   const double res = 0.02;
   FastOctTree base(res);

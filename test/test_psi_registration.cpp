@@ -7,8 +7,8 @@
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/icp.h>
 
-#include <pcl_fot/pcl/correspondence_rejection_psi.h>
-#include <pcl_fot/pcl/transformation_validation_psi.h>
+#include <pcl_fot/pcl/registration/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/registration/transformation_validation_psi.h>
 
 #include "scan_data.h"
 
@@ -36,7 +36,9 @@ Eigen::Matrix4f tutorialGuess() {
 
 }  // namespace
 
-TEST(TransformationValidationPsi, RanksACorrectRegistrationAboveWrongOnes) {
+PCL_FOT_SCAN_TESTS(TransformationValidationPsiOnScans);
+
+TEST_P(TransformationValidationPsiOnScans, RanksACorrectRegistrationAboveWrongOnes) {
   const Cloud::Ptr target = downsampled("room_scan1.pcd", 0.1f), source = downsampled("room_scan2.pcd", 0.1f);
   pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;
   icp.setInputSource(source);
@@ -68,7 +70,7 @@ TEST(TransformationValidationPsi, RanksACorrectRegistrationAboveWrongOnes) {
   EXPECT_FALSE(gate.isValid(source, target, off));
 }
 
-TEST(TransformationValidationPsi, AKnownTransformScoresNearZero) {
+TEST_P(TransformationValidationPsiOnScans, AKnownTransformScoresNearZero) {
   const Cloud::Ptr target = downsampled("room_scan1.pcd", 0.05f);
   const Eigen::Affine3f truth =
       Eigen::Translation3f(0.4f, -0.3f, 0.1f) * Eigen::AngleAxisf(0.2f, Eigen::Vector3f::UnitZ());
@@ -82,7 +84,7 @@ TEST(TransformationValidationPsi, AKnownTransformScoresNearZero) {
   EXPECT_GT(wrong, 5 * right);
 }
 
-TEST(TransformationValidationPsi, TheTargetTreeFollowsItsCloud) {
+TEST_P(TransformationValidationPsiOnScans, TheTargetTreeFollowsItsCloud) {
   Cloud::Ptr target = downsampled("room_scan2.pcd", 0.1f);
   const Cloud::Ptr source(new Cloud(*target));
   const Validation psi(0.1, 1.0);
@@ -114,7 +116,9 @@ TEST(TransformationValidationPsi, BadInput) {
   EXPECT_LT(Validation(0.1, 1.0).validateTransformation(far, one, Eigen::Matrix4f::Identity()), uncapped);
 }
 
-TEST(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
+PCL_FOT_SCAN_TESTS(PsiInIcp);
+
+TEST_P(PsiInIcp, TheRejectorScoresEveryIterationAndTheCriteriaCanStop) {
   const Cloud::Ptr target = downsampled("room_scan1.pcd", 0.1f), source = downsampled("room_scan2.pcd", 0.1f);
   auto run = [&](bool stop_on_psi, std::vector<double>& history, std::vector<double>& mse) {
     pcl::IterativeClosestPoint<PointXYZ, PointXYZ> icp;

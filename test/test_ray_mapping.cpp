@@ -110,17 +110,19 @@ void expectSameMapAsOctoMap(const Cloud& cloud, double res, double max_range) {
 
 }  // namespace
 
-TEST(RayCaster, SameCellsAsOctoMapOnEveryRayOfRoomScan1At5cm) {
+PCL_FOT_SCAN_TESTS(RayCasterOnScans);
+
+TEST_P(RayCasterOnScans, SameCellsAsOctoMapOnEveryRayOfRoomScan1At5cm) {
   const float origin[3] = {0, 0, 0};
   expectSameRaysAsOctoMap(*scanInMapFrame("room_scan1.pcd"), 0.05, origin);
 }
 
-TEST(RayCaster, SameCellsAsOctoMapOnEveryRayOfAKinectFrameAt1cm) {
+TEST_P(RayCasterOnScans, SameCellsAsOctoMapOnEveryRayOfAKinectFrameAt1cm) {
   const float origin[3] = {0, 0, 0};
   expectSameRaysAsOctoMap(*scanInMapFrame("kinect_capture0001.pcd"), 0.01, origin);
 }
 
-TEST(RayCaster, SameCellsAsOctoMapFromAnOffCentreSensor) {
+TEST_P(RayCasterOnScans, SameCellsAsOctoMapFromAnOffCentreSensor) {
   const float origin[3] = {0.337f, -1.2049f, 0.71f};  // not on any cell boundary
   expectSameRaysAsOctoMap(*scanInMapFrame("room_scan2.pcd"), 0.05, origin);
 }
@@ -217,19 +219,21 @@ TEST(BlockRayWalker, StretchesAreEachRaysCellsSplitAtEveryBlockChange) {
   }
 }
 
-TEST(ScanInsertion, SameFreeAndOccupiedCellsAsOctoMapOnRoomScan1) {
+PCL_FOT_SCAN_TESTS(ScanInsertionOnScans);
+
+TEST_P(ScanInsertionOnScans, SameFreeAndOccupiedCellsAsOctoMapOnRoomScan1) {
   expectSameMapAsOctoMap(*scanInMapFrame("room_scan1.pcd"), 0.05, -1.0);
 }
 
-TEST(ScanInsertion, SameFreeAndOccupiedCellsAsOctoMapOnAKinectFrame) {
+TEST_P(ScanInsertionOnScans, SameFreeAndOccupiedCellsAsOctoMapOnAKinectFrame) {
   expectSameMapAsOctoMap(*scanInMapFrame("kinect_capture0002.pcd"), 0.01, -1.0);
 }
 
-TEST(ScanInsertion, SameCellsAsOctoMapWithAMaximumRange) {
+TEST_P(ScanInsertionOnScans, SameCellsAsOctoMapWithAMaximumRange) {
   expectSameMapAsOctoMap(*scanInMapFrame("room_scan2.pcd"), 0.05, 4.0);
 }
 
-TEST(ScanInsertion, TreeAndGridAgreeCellForCell) {
+TEST_P(ScanInsertionOnScans, TreeAndGridAgreeCellForCell) {
   const auto cloud = pcl_fot_test::loadScan("kinect_capture0003.pcd");
   const CellGrid vg(0.02);
   FastOctTree tree(vg), tree_plain(vg);
@@ -312,7 +316,7 @@ TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {
   }
 }
 
-TEST(ScanInsertion, PoseFromTheCloudOrGivenExplicitly) {
+TEST_P(ScanInsertionOnScans, PoseFromTheCloudOrGivenExplicitly) {
   auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   cloud->sensor_origin_ = Eigen::Vector4f(1.3f, -0.4f, 0.2f, 0.0f);
   cloud->sensor_orientation_ = Eigen::Quaternionf(Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ()));
@@ -397,7 +401,9 @@ TEST(CastRay, StopsAtTheFirstCellThatIsNotFree) {
   EXPECT_FALSE(castRay(tree, far_away, back, hit, -1.0, true)) << "a ray that misses the map ends";
 }
 
-TEST(CastRay, SameAnswerOnTreeAndGridOverARealMap) {
+PCL_FOT_SCAN_TESTS(CastRayOnScans);
+
+TEST_P(CastRayOnScans, SameAnswerOnTreeAndGridOverARealMap) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   const CellGrid vg(0.05);
   FastOctTree tree(vg);

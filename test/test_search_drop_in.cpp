@@ -20,7 +20,7 @@
 #include <pcl/surface/gp3.h>
 #include <pcl/surface/mls.h>
 
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 
 #include "scan_data.h"
 
@@ -53,7 +53,9 @@ Registration registerWithOurSearch(const Cloud::Ptr& source, const Cloud::Ptr& t
 
 }  // namespace
 
-TEST(SearchDropIn, IcpRecoversAKnownTransform) {
+PCL_FOT_SCAN_TESTS(SearchDropIn);
+
+TEST_P(SearchDropIn, IcpRecoversAKnownTransform) {
   Cloud::Ptr target(new Cloud), source(new Cloud);
   pcl::VoxelGrid<PointXYZ> grid;
   grid.setInputCloud(pcl_fot_test::loadScan("room_scan1.pcd"));
@@ -77,7 +79,7 @@ TEST(SearchDropIn, IcpRecoversAKnownTransform) {
  * asserts on a NaN query; PCL's correspondence estimation reads our placeholder at an infinite distance
  * and passes over the point, so ICP works on the finite points alone.
  */
-TEST(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
+TEST_P(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
   const Cloud::Ptr frame = pcl_fot_test::loadScan("kinect_capture0001.pcd");
   Cloud::Ptr organised(new Cloud(frame->width / 4, frame->height / 4)), finite(new Cloud), target(new Cloud);
   for (std::uint32_t r = 0; r < organised->height; ++r)
@@ -85,7 +87,7 @@ TEST(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
   organised->is_dense = false;
   for (const PointXYZ& p : *organised)
     if (pcl::isFinite(p)) finite->push_back(p);
-  ASSERT_GT(organised->size() - finite->size(), 1000u) << "the frame has NaN points";
+  ASSERT_GT(organised->size() - finite->size(), organised->size() / 20) << "the frame has NaN points";
   const Eigen::Affine3f truth =
       Eigen::Translation3f(0.03f, -0.02f, 0.01f) * Eigen::AngleAxisf(0.02f, Eigen::Vector3f::UnitY());
   pcl::transformPointCloud(*finite, *target, truth);
@@ -110,7 +112,7 @@ TEST(SearchDropIn, IcpPassesOverTheNanPointsOfAnOrganisedSource) {
  * equal distance also come in FLANN's traversal order there and by index here, and the covariance sums them
  * in that order, so the normals agree to float rounding, not always to the last bit.
  */
-TEST(SearchDropIn, NormalEstimationGivesTheSameNormals) {
+TEST_P(SearchDropIn, NormalEstimationGivesTheSameNormals) {
   const Cloud::Ptr cloud = pcl_fot_test::loadScan("kinect_capture0001.pcd");
   pcl::search::KdTree<PointXYZ>::Ptr kdtree(new pcl::search::KdTree<PointXYZ>);
   Search::Ptr ours(new Search(0.01));
@@ -182,12 +184,12 @@ TEST(SearchDropIn, NormalEstimationGivesTheSameNormals) {
       ASSERT_NEAR(x.curvature, y.curvature, 1e-4) << "point " << i;
       ++compared;
     }
-    EXPECT_GT(compared, 200000u);
+    EXPECT_GT(compared, with_fot.size() / 2);
     EXPECT_LT(skipped, compared / 4) << "ambiguous neighbourhoods are the exception";
   }
 }
 
-TEST(SearchDropIn, EuclideanClustersAreTheSame) {
+TEST_P(SearchDropIn, EuclideanClustersAreTheSame) {
   Cloud::Ptr cloud(new Cloud);
   pcl::VoxelGrid<PointXYZ> grid;
   grid.setInputCloud(pcl_fot_test::loadScan("room_scan2.pcd"));
@@ -220,7 +222,7 @@ TEST(SearchDropIn, EuclideanClustersAreTheSame) {
  * Each algorithm run twice on a room scan, once with KdTree and once with ours, as setSearchMethod takes
  * them: the results agree to float rounding (neighbours at equal distance may come in another order).
  */
-TEST(SearchDropIn, FeaturesSurfacesKeypointsSegmentationAndGicpAsWithKdTree) {
+TEST_P(SearchDropIn, FeaturesSurfacesKeypointsSegmentationAndGicpAsWithKdTree) {
   Cloud::Ptr cloud(new Cloud), moved(new Cloud);
   pcl::VoxelGrid<PointXYZ> grid;
   grid.setInputCloud(pcl_fot_test::loadScan("room_scan1.pcd"));

@@ -10,7 +10,7 @@
 #include <pcl/common/common.h>
 #include <pcl/common/point_tests.h>
 
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 
 #include "scan_data.h"
 
@@ -145,7 +145,9 @@ TEST(SearchUpdates, RandomSequencesEqualBruteForce) {
   }
 }
 
-TEST(SearchUpdates, AnUpdatedScanAnswersAsANewSearchOfItsPoints) {
+PCL_FOT_SCAN_TESTS(SearchUpdatesOnScans);
+
+TEST_P(SearchUpdatesOnScans, AnUpdatedScanAnswersAsANewSearchOfItsPoints) {
   const Cloud::Ptr room = pcl_fot_test::loadScan("room_scan1.pcd");
   const Cloud::Ptr other = pcl_fot_test::loadScan("room_scan2.pcd");
   Search updated;
@@ -241,7 +243,7 @@ TEST(SearchUpdates, BadInputGetsAnErrorAndChangesNothing) {
   EXPECT_EQ(search.size(), 49u);
 }
 
-TEST(SearchUpdates, ACrowdedMapPicksItsCellsAnewAndAnswersAlike) {
+TEST_P(SearchUpdatesOnScans, ACrowdedMapPicksItsCellsAnewAndAnswersAlike) {
   // Frames of one place pile up in the cells picked for the first: the grid is fitted again, exactly.
   const Cloud::Ptr room = pcl_fot_test::loadScan("room_scan1.pcd");
   Search grown;

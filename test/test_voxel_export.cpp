@@ -22,12 +22,11 @@ using namespace pcl::fot;
 namespace {
 
 const FastOctTree& roomMap() {
-  static const FastOctTree map = [] {
+  return pcl_fot_test::perScanSet<FastOctTree>([] {
     FastOctTree t(0.1, 0.05, 0.0, -0.05);
     insertScan(t, *pcl_fot_test::loadScan("room_scan1.pcd"));
     return t;
-  }();
-  return map;
+  });
 }
 
 std::string tempPath(const std::string& name) {
@@ -48,7 +47,9 @@ std::set<Centre> centres(const FastOctTree& t, CellState s) {
 
 }  // namespace
 
-TEST(VoxelExport, PcdHoldsTheCellCentresWithAnIdentityViewpoint) {
+PCL_FOT_SCAN_TESTS(VoxelExport);
+
+TEST_P(VoxelExport, PcdHoldsTheCellCentresWithAnIdentityViewpoint) {
   const FastOctTree& map = roomMap();
   const std::string path = tempPath("centres.pcd");
   EXPECT_EQ(io::saveVoxelCentersPCD(map, path), map.getOccupiedCount());
@@ -74,7 +75,7 @@ TEST(VoxelExport, PcdHoldsTheCellCentresWithAnIdentityViewpoint) {
   std::remove(path.c_str());
 }
 
-TEST(VoxelExport, VtkMeshHasOneQuadPerExposedFace) {
+TEST_P(VoxelExport, VtkMeshHasOneQuadPerExposedFace) {
   const FastOctTree& map = roomMap();
   // The faces an occupied voxel shares with a voxel that is not occupied, counted cell by cell.
   std::size_t exposed = 0;
@@ -103,7 +104,7 @@ TEST(VoxelExport, VtkMeshHasOneQuadPerExposedFace) {
   std::remove(path.c_str());
 }
 
-TEST(VoxelExport, RefusesTooManyCellsAndUnwritablePaths) {
+TEST_P(VoxelExport, RefusesTooManyCellsAndUnwritablePaths) {
   const FastOctTree& map = roomMap();
   io::VoxelExportOptions small;
   small.max_cells = 10;

@@ -1,5 +1,6 @@
 // fot_bench: reruns the paper's experiments on the real scans and writes doc/benchmarks.md.
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <set>
@@ -28,7 +29,8 @@ void printHelp(const char* prog) {
       "Syntax: %s [options]\n\n"
       "  -data <dir>        directory with the scans of PCL's data repository (default: ../shared/data)\n"
       "  -out <file>        Markdown report to write (default: doc/benchmarks.md); the psi plot goes beside "
-      "it\n"
+      "it,\n"
+      "                     the other plots (gnuplot) into img/ beside it\n"
       "  -repeats <n>       insertions per cloud and structure (default: 20, as in the paper)\n"
       "  -ray_repeats <n>   rounds of the ray tracing, search, octree, algorithm and psi timings (default: "
       "5)\n"
@@ -64,6 +66,25 @@ std::string firstLineOf(const char* path, const char* key) {
   while (std::getline(in, line))
     if (line.rfind(key, 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown";
+}
+
+/** Draws the report's plots into <its directory>/img/ with scripts/make_pictures.sh, the script behind every
+ *  picture of the docs, which can redraw them from the report alone. */
+void drawPlots(const std::string& report, const std::string& doc_dir) {
+  // __FILE__ names this file as the build gave it, <source tree>/tools/fot_bench.cpp.
+  const std::string self = __FILE__,
+                    script = self.substr(0, self.rfind("tools/")) + "scripts/make_pictures.sh";
+  auto quoted = [](std::string s) {  // for the shell: 'it'\''s'
+    for (std::size_t at = s.find('\''); at != std::string::npos; at = s.find('\'', at + 4))
+      s.replace(at, 1, "'\\''");
+    return "'" + s + "'";
+  };
+  const std::string command =
+      "bash " + quoted(script) + " plots --bench " + quoted(report) + " " + quoted(doc_dir + "/img");
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
+    print_info("No gnuplot, so no plots: install gnuplot-nox, then run %s\n", command.c_str());
+  else if (std::system(command.c_str()) != 0)
+    print_warn("The plots failed (%s); the report stands\n", command.c_str());
 }
 
 }  // namespace
@@ -123,6 +144,7 @@ int main(int argc, char** argv) {
     if (wanted("psi")) md << fot_bench::benchPsi(scans, ray_repeats, dmap_repeats, plot) << "\n";
     pcl::fot::io::writeFileAtomically(out, md.str());
     print_info("Wrote %s in %.1f s\n", out.c_str(), total.toc() / 1000.0);
+    drawPlots(out, doc_dir);
     return kExitOk;
   });
 }

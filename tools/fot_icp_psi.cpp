@@ -11,8 +11,8 @@
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/icp.h>
 
-#include <pcl_fot/pcl/correspondence_rejection_psi.h>
-#include <pcl_fot/pcl/transformation_validation_psi.h>
+#include <pcl_fot/pcl/registration/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/registration/transformation_validation_psi.h>
 
 #include "cloud_file.h"
 #include "tool_common.h"

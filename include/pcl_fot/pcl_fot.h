@@ -35,7 +35,7 @@
 
 // The PCL adapters: clouds in, the pcl::octree look-alikes, the pcl::search drop-in, registration plugins.
 #include <pcl_fot/pcl/cloud_insertion.h>
-#include <pcl_fot/pcl/correspondence_rejection_psi.h>
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
-#include <pcl_fot/pcl/octree.h>
-#include <pcl_fot/pcl/transformation_validation_psi.h>
+#include <pcl_fot/pcl/octree/octree.h>
+#include <pcl_fot/pcl/registration/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/registration/transformation_validation_psi.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>

@@ -1,4 +1,4 @@
-#include <pcl_fot/detail/cell_buckets.h>
+#include <pcl_fot/search/cell_buckets.h>
 
 namespace pcl {
 namespace fot {

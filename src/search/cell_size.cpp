@@ -13,17 +13,6 @@ namespace {
 
 constexpr unsigned kLevels = 21;  // bits per axis of a 63-bit Morton code
 
-/** Spreads the low 21 bits of v to every third bit. */
-std::uint64_t spreadBits(std::uint32_t v) {
-  std::uint64_t x = v & 0x1FFFFFu;
-  x = (x | x << 32) & 0x1F00000000FFFFull;
-  x = (x | x << 16) & 0x1F0000FF0000FFull;
-  x = (x | x << 8) & 0x100F00F00F00F00Full;
-  x = (x | x << 4) & 0x10C30C30C30C30C3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
 /**
  * Cells holding `total` points of which a fraction `kept` was sampled, `hit` of them by the sample: the
  * count at which cells of equal occupancy would be hit that often, 1 - (1 - kept)^(points per cell) each.
@@ -61,12 +50,11 @@ Edge levelEdge(const std::vector<std::array<float, 3>>& sample, std::size_t fini
   for (const auto& p : sample) {
     if (p[0] < lo[0] || p[0] > hi[0] || p[1] < lo[1] || p[1] > hi[1] || p[2] < lo[2] || p[2] > hi[2])
       continue;
-    std::uint64_t code = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double u = std::min(std::floor((double(p[a]) - lo[a]) / finest), double((1u << kLevels) - 1));
-      code |= spreadBits(std::uint32_t(u)) << a;
-    }
-    codes.push_back(code);
+    std::uint32_t u[3];
+    for (int a = 0; a < 3; ++a)
+      u[a] =
+          std::uint32_t(std::min(std::floor((double(p[a]) - lo[a]) / finest), double((1u << kLevels) - 1)));
+    codes.push_back(morton3(u[0], u[1], u[2]));
   }
   if (codes.empty()) return {side, false};
   std::sort(codes.begin(), codes.end());

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <pcl_fot/detail/bits.h>
 #include <pcl_fot/tree/accessor.h>
 
 #include "search/cell_size.h"
@@ -47,15 +48,6 @@ inline float pointDistance(Metric metric, const float* p, const float q[3]) {
     default:
       return std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
   }
-}
-
-/** The Morton number of a cell inside an aligned cube of 2^level cells, in the tree's octant order. */
-std::uint64_t mortonWithin(std::uint32_t x, std::uint32_t y, std::uint32_t z, unsigned level) {
-  std::uint64_t code = 0;
-  for (unsigned b = 0; b < level; ++b)
-    code |= (std::uint64_t((x >> b) & 1u) << (3 * b)) | (std::uint64_t((y >> b) & 1u) << (3 * b + 1)) |
-            (std::uint64_t((z >> b) & 1u) << (3 * b + 2));
-  return code;
 }
 
 /** Numbers the occupied cells in Morton order: each bitmap word gets the rank of its first one. */
@@ -638,7 +630,7 @@ std::uint32_t PointIndex::cellRank(ConstAccessor& reader, const Key& k) const {
       node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
   const std::uint32_t inner = tree_coord::lowMask(level - 1);
   return std::uint32_t(ranks_[offset] + node::cellsIn(node::popcount(before), level - 1) +
-                       mortonWithin(u[0] & inner, u[1] & inner, u[2] & inner, level - 1));
+                       detail::morton3(u[0] & inner, u[1] & inner, u[2] & inner));
 }
 
 void PointIndex::fillTable(const Input& in, Placement& placed, std::uint64_t cells) {

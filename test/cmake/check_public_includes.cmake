@@ -4,12 +4,12 @@ set(allowed
   "pcl_fot/tree/tree_coord.h:pcl_fot/detail/bits.h"
   "pcl_fot/tree/fast_oct_tree.h:pcl_fot/detail/block_pages.h"
   "pcl_fot/dense/fast_occ_mesh.h:pcl_fot/detail/bits.h"
-  "pcl_fot/pcl/octree_point_cloud.h:pcl_fot/detail/version_cache.h"
-  "pcl_fot/pcl/octree_point_cloud_search.h:pcl_fot/detail/version_cache.h"
-  "pcl_fot/pcl/impl/fast_oct_tree_search.hpp:pcl_fot/detail/cloud_fingerprint.h"
-  "pcl_fot/pcl/impl/fast_oct_tree_search.hpp:pcl_fot/detail/worker_threads.h"
-  "pcl_fot/pcl/impl/transformation_validation_psi.hpp:pcl_fot/detail/cloud_fingerprint.h"
-  "pcl_fot/search/point_index.h:pcl_fot/detail/cell_buckets.h")
+  "pcl_fot/pcl/octree/octree_point_cloud.h:pcl_fot/detail/version_cache.h"
+  "pcl_fot/pcl/octree/octree_point_cloud_search.h:pcl_fot/detail/version_cache.h"
+  "pcl_fot/pcl/octree/impl/octree_point_cloud_search.hpp:pcl_fot/detail/bits.h"
+  "pcl_fot/pcl/search/impl/fast_oct_tree_search.hpp:pcl_fot/detail/cloud_fingerprint.h"
+  "pcl_fot/pcl/search/impl/fast_oct_tree_search.hpp:pcl_fot/detail/worker_threads.h"
+  "pcl_fot/pcl/registration/impl/transformation_validation_psi.hpp:pcl_fot/detail/cloud_fingerprint.h")
 file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}" "${INCLUDE_DIR}/pcl_fot/*.h" "${INCLUDE_DIR}/pcl_fot/*.hpp")
 set(failures "")
 foreach(header ${headers})

@@ -3,7 +3,7 @@
 
 #include <pcl/point_types.h>
 #include <pcl_fot/pcl/cloud_insertion.h>
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 #include <pcl_fot/tree/accessor.h>
 
 int main() {

@@ -7,10 +7,10 @@
 #include <pcl/point_types.h>
 #include <pcl/register_point_struct.h>
 #include <pcl/registration/icp.h>
-#include <pcl_fot/pcl/correspondence_rejection_psi.h>
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
-#include <pcl_fot/pcl/octree_point_cloud.h>
-#include <pcl_fot/pcl/transformation_validation_psi.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud.h>
+#include <pcl_fot/pcl/registration/correspondence_rejection_psi.h>
+#include <pcl_fot/pcl/registration/transformation_validation_psi.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 
 struct EIGEN_ALIGN16 LidarPoint {
   PCL_ADD_POINT4D;

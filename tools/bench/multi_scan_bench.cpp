@@ -11,7 +11,7 @@
 
 #include "bench_util.h"
 #include "sections.h"
-#include "../synthetic_scene.h"
+#include "synthetic_scene.h"
 
 namespace fot_bench {
 namespace {
@@ -110,8 +110,10 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
          " times, medians. OctoMap 1.9's `OcTree::insertPointCloud` (its sensor model's defaults, no "
          "discretize, single-threaded as Debian builds it) next to `insertRays` by the log-odds rule, which "
          "gives every cell OctoMap's float bit for bit (`test_log_odds_mapping`), and by the binary rule. "
-         "Memory: OctoMap's `memoryUsage()` (its nodes, without malloc's overhead) and our `getMemoryBytes()` "
-         "after `shrinkToFit()` (pool, free blocks included, value blocks and their index, the palette). Goal: 25× OctoMap's speed and at most 1/5 of its memory.\n\n" +
+         "Memory: OctoMap's `memoryUsage()` (its nodes, without malloc's overhead) and our "
+         "`getMemoryBytes()` "
+         "after `shrinkToFit()` (pool, free blocks included, value blocks and their index, the palette). "
+         "Goal: 25× OctoMap's speed and at most 1/5 of its memory.\n\n" +
          table.markdown();
 }
 

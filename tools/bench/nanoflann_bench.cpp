@@ -15,10 +15,11 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
 
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 
 #include "bench_util.h"
 #include "nanoflann_points.h"
+#include "nanoflann_search.h"
 
 namespace fot_bench {
 namespace {
@@ -97,12 +98,12 @@ double timeRuns(const Run& run, int repeats, int inner, double& sum) {
 }
 
 /**
- * Whether FastOctTreeSearch's distances equal KdTreeFLANN's, query by query, to the bit. FLANN's radius
- * bound is strict: the points exactly at the radius, which ours keeps (as BruteForce), are counted apart.
+ * Whether a search's distances (ours, or nanoflann's behind PCL's interface) equal KdTreeFLANN's, query by
+ * query, to the bit. FLANN's radius bound is strict: the points exactly at the radius, which ours keeps (as
+ * BruteForce), are counted apart.
  */
-std::string flannAgreement(const Row& row) {
-  Search ours;
-  ours.setInputCloud(row.target_cloud);
+std::string flannAgreement(const Row& row, pcl::search::KdTree<pcl::PointXYZ>&& search) {
+  search.setInputCloud(row.target_cloud);
   pcl::KdTreeFLANN<pcl::PointXYZ> flann;
   flann.setInputCloud(row.target_cloud);
   pcl::Indices idx;
@@ -111,10 +112,10 @@ std::string flannAgreement(const Row& row) {
   const float bound = float(double(row.radius) * double(row.radius));
   for (const auto& q : row.query_points) {
     if (row.k > 0) {
-      ours.nearestKSearch(q, row.k, idx, a);
+      search.nearestKSearch(q, row.k, idx, a);
       flann.nearestKSearch(q, row.k, idx, b);
     } else {
-      ours.radiusSearch(q, row.radius, idx, a);
+      search.radiusSearch(q, row.radius, idx, a);
       flann.radiusSearch(q, row.radius, idx, b);
       while (!a.empty() && a.back() == bound && b.size() < a.size()) a.pop_back(), ++at_radius;
     }
@@ -126,7 +127,8 @@ std::string flannAgreement(const Row& row) {
 std::string staticRows(const std::vector<Row>& rows, int repeats, std::vector<double>& nano_ratios,
                        std::vector<std::string>& verdicts) {
   Table t({"target", "queries", "query", "points", "queries", "FOT ms", "KdTreeFLANN ms", "nanoflann ms",
-           "nanoflann / FOT", "FLANN / FOT", "same distances as FLANN"});
+           "nanoflann / FOT", "FLANN / FOT", "FOT: same distances as FLANN",
+           "nanoflann: same distances as FLANN"});
   double worst_flann = 1e300;
   for (const Row& row : rows) {
     const Points finite = finitePoints(*row.target_cloud);
@@ -161,8 +163,9 @@ std::string staticRows(const std::vector<Row>& rows, int repeats, std::vector<do
       return queryAll(s);
     };
     // As PCL 1.15's KdTreeNanoflann: leaves of 10 points for 1-NN, of 20 otherwise; float distances.
+    const std::size_t leaf = k == 1 ? 10 : 20;
     const Run nano = [&] {
-      NanoL2 tree(3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(k == 1 ? 10 : 20));
+      NanoL2 tree(3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(leaf));
       tree.buildIndex();
       std::vector<unsigned> ni(std::max<std::size_t>(k, 1));
       std::vector<float> nd(std::max<std::size_t>(k, 1));
@@ -184,14 +187,16 @@ std::string staticRows(const std::vector<Row>& rows, int repeats, std::vector<do
     // Small clouds take microseconds: each timing then covers enough runs to reach about a millisecond.
     const int inner = int(std::max<std::size_t>(1, 40000 / (total_points + row.query_points.size() * 4)));
     std::fprintf(stderr, "  search: %s, %s against nanoflann\n", row.queries.c_str(), row.target.c_str());
-    double s_fot = 0, s_flann = 0, s_nano = 0;  // the answers' sums, computed so that no run is skipped
+    // The timed runs' sums only keep the compiler from skipping them; the answers are checked below.
+    double s_fot = 0, s_flann = 0, s_nano = 0;
     const double t_fot = timeRuns(fot, repeats, inner, s_fot),
                  t_flann = timeRuns(flann, repeats, inner, s_flann),
                  t_nano = timeRuns(nano, repeats, inner, s_nano);
     const std::string kind = k == 0 ? format("radius %.3g m", row.radius) : format("k = %d", row.k);
     t.add({row.target, row.queries, kind, format("%zu", total_points), format("%zu", row.query_points.size()),
            format("%.2f", t_fot), format("%.2f", t_flann), format("%.2f", t_nano),
-           format("**%.2f×**", t_nano / t_fot), format("%.2f×", t_flann / t_fot), flannAgreement(row)});
+           format("**%.2f×**", t_nano / t_fot), format("%.2f×", t_flann / t_fot),
+           flannAgreement(row, Search()), flannAgreement(row, NanoflannKdTree<pcl::PointXYZ>(leaf))});
     nano_ratios.push_back(t_nano / t_fot);
     worst_flann = std::min(worst_flann, t_flann / t_fot);
   }
@@ -407,7 +412,9 @@ std::string benchSearchAgainstNanoflann(const std::vector<BenchScan>& scans, con
       "`KdTreeNanoflann` sets it: leaves of 10 points for 1-NN and 20 otherwise, float coordinates and "
       "distances. 1-NN asks every finite query point, k = 10, 50 and the radius search every fourth (all of "
       "them for the small cloud, the terrain and the sweep). Small clouds are timed over enough runs to take "
-      "about a millisecond, and the time of one given.\n\n",
+      "about a millisecond, and the time of one given. The last two columns compare each search's distances "
+      "with KdTreeFLANN's, query by query (nanoflann's through `tools/bench/nanoflann_search.h`, the same "
+      "tree and leaves).\n\n",
       repeats,
       format("%d.%d.%d", NANOFLANN_VERSION >> 8, (NANOFLANN_VERSION >> 4) & 0xF, NANOFLANN_VERSION & 0xF)
           .c_str());

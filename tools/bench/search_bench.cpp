@@ -15,7 +15,7 @@
 #include <flann/flann.hpp>
 
 #include <pcl_fot/pcl/cloud_insertion.h>
-#include <pcl_fot/pcl/fast_oct_tree_search.h>
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 #include <pcl_fot/search/nearest_cell_search.h>
 
 #include "bench_util.h"

@@ -49,6 +49,21 @@ constexpr unsigned popcount64(std::uint64_t x) {
   return unsigned((x * 0x0101010101010101ull) >> 56);
 }
 
+/** Moves bit i of v to bit 3i, for v below 2^21: one axis of a Morton code. */
+constexpr std::uint64_t spreadBits3(std::uint64_t v) {
+  v &= 0x1FFFFFull;
+  v = (v | v << 32) & 0x1F00000000FFFFull;
+  v = (v | v << 16) & 0x1F0000FF0000FFull;
+  v = (v | v << 8) & 0x100F00F00F00F00Full;
+  v = (v | v << 4) & 0x10C30C30C30C30C3ull;
+  return (v | v << 2) & 0x1249249249249249ull;
+}
+
+/** The Morton code of a cell, each coordinate below 2^21: x's bits lowest, as the tree numbers octants. */
+constexpr std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  return spreadBits3(x) | spreadBits3(y) << 1 | spreadBits3(z) << 2;
+}
+
 }  // namespace detail
 }  // namespace fot
 }  // namespace pcl

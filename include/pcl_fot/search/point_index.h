@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include <pcl_fot/detail/cell_buckets.h>
+#include <pcl_fot/search/cell_buckets.h>
 #include <pcl_fot/search/nearest_cell_search.h>
 #include <pcl_fot/tree/accessor.h>
 #include <pcl_fot/tree/fast_oct_tree.h>

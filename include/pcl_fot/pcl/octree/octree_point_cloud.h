@@ -1,0 +1,423 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <type_traits>
+#include <unordered_map>
+#include <vector>
+
+#include <pcl/memory.h>
+#include <pcl/octree/octree_key.h>
+#include <pcl/pcl_macros.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/types.h>
+#include <Eigen/Core>
+
+#include <pcl_fot/detail/version_cache.h>
+#include <pcl_fot/pcl/octree/octree_containers.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+/**
+ * A FastOctTree with the interface of pcl::octree::OctreePointCloud: code written for it compiles after
+ * changing the namespace, and gets the same answers.
+ *
+ * The bounding box follows PCL exactly: undefined until the first point, which it surrounds with ±res/2;
+ * growing by doubling towards points outside it; or set with defineBoundingBox() and padded to a cube of
+ * 2^depth cells. Keys, voxel centres and bounds are computed with PCL's arithmetic. The occupied cells
+ * live in a FastOctTree at fixed keys, shifted as the box grows.
+ *
+ * Leaves hold LeafContainerT, pcl::octree's own container types (point indices by default), in a table
+ * beside the tree keyed by each leaf's cube; with OctreeContainerEmpty there is no table and the tree alone
+ * answers (OctreePointCloudOccupancy). Branches hold nothing: BranchContainerT is accepted for PCL's
+ * signature only. Under enableDynamicDepth, leaves stay as shallow as PCL keeps them.
+ *
+ * Differences from pcl::octree, listed in doc/user_guide.md: there is no serializeTree (see the .fot file
+ * format); points that are not finite, or that would grow the box beyond ±2^29 cells, are refused with
+ * PCL_ERROR rather than asserting.
+ */
+template <typename PointT, typename LeafContainerT = OctreeContainerPointIndices,
+          typename BranchContainerT = OctreeContainerEmpty>
+class OctreePointCloud {
+ public:
+  using Ptr = shared_ptr<OctreePointCloud<PointT, LeafContainerT, BranchContainerT>>;
+  using ConstPtr = shared_ptr<const OctreePointCloud<PointT, LeafContainerT, BranchContainerT>>;
+  using PointCloud = pcl::PointCloud<PointT>;
+  using PointCloudPtr = typename PointCloud::Ptr;
+  using PointCloudConstPtr = typename PointCloud::ConstPtr;
+  using IndicesPtr = shared_ptr<Indices>;
+  using IndicesConstPtr = shared_ptr<const Indices>;
+  using AlignedPointTVector = std::vector<PointT, Eigen::aligned_allocator<PointT>>;
+  using AlignedPointXYZVector = std::vector<PointXYZ, Eigen::aligned_allocator<PointXYZ>>;
+  using SingleBuffer = OctreePointCloud<PointT, LeafContainerT, BranchContainerT>;
+  using LeafContainer = LeafContainerT;
+  using BranchContainer = BranchContainerT;
+  using LeafNode = octree::OctreeLeafNode<LeafContainerT>;
+  using BranchNode = octree::OctreeBranchNode<BranchContainerT>;
+
+ private:
+  /** Whether leaves hold containers; the occupancy octree's leaves are the tree's cells. */
+  static constexpr bool kHoldsLeaves = !std::is_same<LeafContainerT, OctreeContainerEmpty>::value;
+
+  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
+  struct LeafId {
+    Key corner;
+    std::uint32_t level;
+    bool operator==(const LeafId& o) const {
+      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
+    }
+  };
+  struct LeafIdHash {
+    std::size_t operator()(const LeafId& id) const {
+      std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
+      h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) *
+           0x165667B19E3779F9ULL;
+      return std::size_t(h ^ (h >> 29));
+    }
+  };
+  /** PCL's branches: each one's cube, with the bit pattern of its children (bit i: child i exists). */
+  using BranchIndex = std::unordered_map<LeafId, std::uint8_t, LeafIdHash>;
+
+  /** One node of the octree pcl::octree would build. */
+  struct Node {
+    octree::OctreeKey key;  // as in PCL, only the bits of its depth
+    uindex_t depth;
+    std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf
+    bool leaf;
+  };
+
+ public:
+  /**
+   * Walks pcl::octree's nodes, branches (the root included) and leaves, in the order of the PCL iterator
+   * it stands for: depth first (children in PCL's order) or breadth first, every node or only leaves or
+   * one depth, down to a maximum depth. It walks the octree's branches as they were when it was made;
+   * adding or deleting points invalidates it, as in PCL.
+   */
+  class NodeIterator {
+   public:
+    NodeIterator() = default;
+    NodeIterator& operator++() {
+      advance();
+      return *this;
+    }
+    NodeIterator operator++(int) {
+      NodeIterator before = *this;
+      advance();
+      return before;
+    }
+    /**
+     * As PCL's: iterators of one octree are equal when both are at their end, or when they share their
+     * maximum depth and stand on nodes of the same key. Iterators of two octrees are never equal.
+     */
+    bool operator==(const NodeIterator& o) const {
+      if (tree_ != o.tree_) return false;
+      if (at_end_ || o.at_end_) return at_end_ && o.at_end_;
+      return max_depth_ == o.max_depth_ && node_.key == o.node_.key;
+    }
+    bool operator!=(const NodeIterator& o) const { return !(*this == o); }
+    /** As in PCL, a branch's key holds only the bits of its depth. */
+    const octree::OctreeKey& getCurrentOctreeKey() const { return node_.key; }
+    uindex_t getCurrentOctreeDepth() const { return node_.depth; }
+    bool isLeafNode() const { return node_.leaf; }
+    bool isBranchNode() const { return !node_.leaf; }
+    /** PCL's bit pattern of a branch's children (bit i: child i exists); 0 for a leaf. */
+    char getNodeConfiguration() const { return static_cast<char>(node_.children); }
+    /**
+     * The leaf's node from the octree's table; for a branch, one node of type BRANCH_NODE that all
+     * branches share (branches hold nothing here).
+     */
+    OctreeNode* getCurrentOctreeNode() const;
+    /** The leaf's container; only on a leaf. */
+    LeafContainerT& getLeafContainer() const { return tree_->leafAt(node_.key, node_.depth)->getContainer(); }
+
+   private:
+    friend class OctreePointCloud;
+    /** Which nodes the walk stops at. */
+    enum class Stops : std::uint8_t { All, Leaves, OneDepth };
+    NodeIterator(const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth);
+    /** On to the next node the walk stops at, or to the end. */
+    void advance();
+    /** The node at this key and depth: a branch of the index, else a leaf. */
+    Node nodeAt(const octree::OctreeKey& key, uindex_t depth) const;
+
+    const OctreePointCloud* tree_ = nullptr;
+    std::shared_ptr<const BranchIndex> branches_;
+    bool depth_first_ = true;
+    Stops stops_ = Stops::All;
+    uindex_t max_depth_ = 0;
+    Node node_{};
+    bool at_end_ = true;
+    // The nodes still to visit: depth first takes the last (children pushed last to first), breadth first
+    // the first.
+    std::deque<Node> pending_;
+  };
+  using Iterator = NodeIterator;
+  using ConstIterator = NodeIterator;
+  using DepthFirstIterator = NodeIterator;
+  using ConstDepthFirstIterator = NodeIterator;
+  using BreadthFirstIterator = NodeIterator;
+  using ConstBreadthFirstIterator = NodeIterator;
+  using FixedDepthIterator = NodeIterator;
+  using ConstFixedDepthIterator = NodeIterator;
+  using LeafNodeIterator = NodeIterator;
+  using ConstLeafNodeIterator = NodeIterator;
+  using LeafNodeDepthFirstIterator = NodeIterator;
+  using ConstLeafNodeDepthFirstIterator = NodeIterator;
+  using LeafNodeBreadthFirstIterator = NodeIterator;
+  using ConstLeafNodeBreadthFirstIterator = NodeIterator;
+
+  /** Throws std::invalid_argument for a resolution CellGrid refuses (PCL asserts). */
+  OctreePointCloud(const double resolution_arg);
+  virtual ~OctreePointCloud() = default;
+
+  void setInputCloud(const PointCloudConstPtr& cloud_arg,
+                     const IndicesConstPtr& indices_arg = IndicesConstPtr());
+  PointCloudConstPtr getInputCloud() const { return input_; }
+  IndicesConstPtr const getIndices() const { return indices_; }
+  void setEpsilon(double eps) { epsilon_ = eps; }
+  double getEpsilon() const { return epsilon_; }
+  /** Only while the tree is empty, as in PCL. */
+  void setResolution(double resolution_arg);
+  double getResolution() const { return resolution_; }
+  uindex_t getTreeDepth() const { return depth_; }
+
+  /** Adds every finite point of the input cloud (or of its indices) to its leaf, in index order. */
+  void addPointsFromInputCloud();
+  /** Adds the input cloud's point point_idx_arg and appends the index to indices_arg, if given. */
+  void addPointFromCloud(uindex_t point_idx_arg, IndicesPtr indices_arg);
+  /** Appends the point to the input cloud (which must be cloud_arg) and adds it. */
+  void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg);
+  void addPointToCloud(const PointT& point_arg, PointCloudPtr cloud_arg, IndicesPtr indices_arg);
+  /** Creates the point's leaf, holding no point (OctreePointCloudOccupancy's call). */
+  void setOccupiedVoxelAtPoint(const PointT& point_arg);
+  /** Skips points that are not finite, as PCL does. */
+  void setOccupiedVoxelsAtPointsFromCloud(PointCloudPtr cloud_arg);
+
+  /** False outside the bounding box. */
+  bool isVoxelOccupiedAtPoint(const PointT& point_arg) const;
+  bool isVoxelOccupiedAtPoint(const double point_x_arg, const double point_y_arg,
+                              const double point_z_arg) const;
+  bool isVoxelOccupiedAtPoint(const index_t& point_idx_arg) const;
+  /** The container of the leaf holding the point's voxel; nullptr if there is none. */
+  LeafContainerT* findLeafAtPoint(const PointT& point_arg) const;
+  /** Deletes the leaf holding the point's voxel (under dynamic depth, the shallow leaf); no-op outside the
+   * box. */
+  void deleteVoxelAtPoint(const PointT& point_arg);
+  void deleteVoxelAtPoint(const index_t& point_idx_arg);
+
+  /** Clears the list, then fills it in pcl::octree's order. */
+  uindex_t getOccupiedVoxelCenters(AlignedPointTVector& voxel_center_list_arg) const;
+  /**
+   * Centres of the occupied voxels a ray from `origin` along `direction` crosses inside the bounding box,
+   * near to far, as OctreePointCloudSearch::getIntersectedVoxelCenters; at most max_voxel_count if not 0.
+   */
+  uindex_t getIntersectedVoxelCenters(Eigen::Vector3f origin, Eigen::Vector3f direction,
+                                      AlignedPointTVector& voxel_center_list,
+                                      uindex_t max_voxel_count = 0) const;
+  /** The point indices of the voxels getIntersectedVoxelCenters finds, voxel by voxel. */
+  uindex_t getIntersectedVoxelIndices(Eigen::Vector3f origin, Eigen::Vector3f direction, Indices& k_indices,
+                                      uindex_t max_voxel_count = 0) const;
+  /** PCL's approximation: samples the segment every res*precision, appends each new voxel's centre. */
+  uindex_t getApproxIntersectedVoxelCentersBySegment(const Eigen::Vector3f& origin,
+                                                     const Eigen::Vector3f& end,
+                                                     AlignedPointTVector& voxel_center_list,
+                                                     float precision = 0.2);
+
+  void defineBoundingBox();
+  void defineBoundingBox(const double min_x_arg, const double min_y_arg, const double min_z_arg,
+                         const double max_x_arg, const double max_y_arg, const double max_z_arg);
+  void defineBoundingBox(const double max_x_arg, const double max_y_arg, const double max_z_arg);
+  void defineBoundingBox(const double cubeLen_arg);
+  void getBoundingBox(double& min_x_arg, double& min_y_arg, double& min_z_arg, double& max_x_arg,
+                      double& max_y_arg, double& max_z_arg) const;
+
+  double getVoxelSquaredDiameter(uindex_t tree_depth_arg) const {
+    return 3.0 * getVoxelSquaredSideLen(tree_depth_arg);
+  }
+  double getVoxelSquaredDiameter() const { return getVoxelSquaredDiameter(depth_); }
+  double getVoxelSquaredSideLen(uindex_t tree_depth_arg) const;
+  double getVoxelSquaredSideLen() const { return getVoxelSquaredSideLen(depth_); }
+  /** The bounds of the node's cube, at its depth, as PCL computes them. */
+  void getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const;
+
+  /** Depth-first, children in index order; max_depth_arg 0 means the full depth. */
+  NodeIterator begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, true, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+  }
+  NodeIterator end() const {
+    NodeIterator at_end;
+    at_end.tree_ = this;
+    return at_end;
+  }
+  NodeIterator cbegin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
+  NodeIterator cend() const { return end(); }
+  NodeIterator depth_begin(uindex_t max_depth_arg = 0u) const { return begin(max_depth_arg); }
+  NodeIterator depth_end() const { return end(); }
+  /** Level by level, from the root down. */
+  NodeIterator breadth_begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, false, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+  }
+  NodeIterator breadth_end() const { return end(); }
+  /** The nodes at one depth, in breadth-first order; none, with PCL_WARN, deeper than the tree. */
+  NodeIterator fixed_depth_begin(uindex_t fixed_depth_arg = 0u) const;
+  NodeIterator fixed_depth_end() const { return end(); }
+  /** The leaves, depth first; those deeper than max_depth_arg are left out. */
+  NodeIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, true, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
+  }
+  NodeIterator leaf_depth_end() const { return end(); }
+  /** The leaves, level by level (they differ from depth first only under dynamic depth). */
+  NodeIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
+    return NodeIterator(this, false, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
+  }
+  NodeIterator leaf_breadth_end() const { return end(); }
+
+  /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
+  bool existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const;
+  /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
+  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg);
+
+  std::size_t getLeafCount() const {
+    if constexpr (kHoldsLeaves)
+      return leaves_.size();
+    else
+      return std::size_t(tree_.getOccupiedCount());
+  }
+  /** The branch nodes pcl::octree would hold for these voxels, its root included. */
+  std::size_t getBranchCount() const;
+  /** Empties the tree and resets the bounding box; the depth stays, as in PCL. */
+  void deleteTree();
+  /**
+   * PCL's dynamic depth: a new leaf is made as shallow as the path allows, and a leaf that holds
+   * maxObjsPerLeaf points or more splits when the next point arrives. 0 turns it off. Only while the tree is
+   * empty. Leaves of OctreeContainerEmpty count no points, so they never split (as in PCL).
+   */
+  void enableDynamicDepth(std::size_t maxObjsPerLeaf);
+
+  /** The FastOctTree holding the voxels (keys shifted from pcl::octree's; see pclKeyToTreeKey). */
+  const FastOctTree& getFastOctTree() const { return tree_; }
+  Key pclKeyToTreeKey(const octree::OctreeKey& k) const {
+    return Key{std::int32_t(k.x) + offset_[0], std::int32_t(k.y) + offset_[1],
+               std::int32_t(k.z) + offset_[2]};
+  }
+
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+
+ protected:
+  /** Adds the input cloud's point point_idx_arg to its leaf; derived look-alikes add it their way. */
+  virtual void addPointIdx(uindex_t point_idx_arg);
+  /** The leaf holding the voxel at this PCL key, creating it (as PCL's createLeaf) if there is none. */
+  LeafNode* createLeaf(const octree::OctreeKey& key);
+  /** The leaf holding the voxel at this PCL key; nullptr if none. */
+  LeafNode* findLeaf(const octree::OctreeKey& key) const;
+  /** The leaf at this depth and key (a node's key, as iterators give it); nullptr if none. */
+  LeafNode* leafAt(const octree::OctreeKey& key, uindex_t depth) const;
+  bool isPointWithinBoundingBox(double x, double y, double z) const {
+    return !(x < min_[0] || y < min_[1] || z < min_[2] || x >= max_[0] || y >= max_[1] || z >= max_[2]);
+  }
+  /** PCL's key: (point - min) / resolution, truncated; only for points inside the box. */
+  octree::OctreeKey pclKey(double x, double y, double z) const;
+  void pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const;
+  /** PCL's genVoxelCenterFromOctreeKey: the centre of the node at this depth and key. */
+  void voxelCenter(const octree::OctreeKey& key, uindex_t depth, PointT& point) const;
+  /** PCL's adoptBoundingBoxToPoint; false (with PCL_ERROR) if the box would leave the key range. */
+  bool adoptBoundingBoxToPoint(double x, double y, double z);
+  /** Bumped by every change of the leaves, so that caches built from them know when they are stale. */
+  std::uint64_t version() const { return version_; }
+  /** Calls visit(container) for every leaf, in no particular order. */
+  template <typename Visit>
+  void forEachLeaf(Visit&& visit) const {
+    if constexpr (kHoldsLeaves)
+      for (const auto& leaf : leaves_) visit(leaf.second.getContainer());
+  }
+  /** Empties the leaves but keeps the bounding box (a new buffer of OctreePointCloudChangeDetector). */
+  void clearLeaves() {
+    tree_.clear();
+    leaves_.clear();
+    last_.leaf = nullptr;
+    phantoms_.clear();
+    ++version_;
+  }
+  /**
+   * The leaf pcl::octree's approxNearestSearch descends to: at each depth, the existing child whose centre
+   * lies nearest to the point. nullptr if the descent meets an empty old root (where PCL asserts).
+   */
+  const LeafNode* approxLeaf(const PointT& point) const;
+
+  PointCloudConstPtr input_;
+  IndicesConstPtr indices_;
+  uindex_t depth_ = 0;
+
+ private:
+  /** The cube at this level holding the tree key k, aligned on PCL's grid. */
+  LeafId cubeOf(const Key& k, std::uint32_t level) const;
+  /** Whether the cube holds an occupied cell or an empty old root. */
+  bool cubeHasContent(const LeafId& cube) const;
+  /**
+   * The leaf on the path to the tree key k, as PCL's descent finds it: the first leaf from the root down;
+   * `id` is its cube. Without one, `id` is where PCL would create it (at full depth without dynamic depth).
+   */
+  LeafNode* leafOnPath(const Key& k, LeafId& id) const;
+  /** createLeaf at a tree key; `id` tells which leaf holds it. */
+  LeafNode* createLeafAt(const Key& k, LeafId& id);
+  /** Calls visit(key) for each occupied voxel the ray crosses in the box, near to far, while it returns true.
+   */
+  template <typename Visit>
+  void walkRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, Visit&& visit) const;
+  /** PCL's expandLeafNode: the leaf becomes a branch, its points go to new leaves one level down. */
+  void expandLeaf(const LeafId& id);
+  void getKeyBitSize();
+  /** PCL's branches, built from the leaves at the first walk after a change. */
+  std::shared_ptr<const BranchIndex> branchIndex() const;
+  std::shared_ptr<const BranchIndex> buildBranchIndex() const;
+
+  double epsilon_ = 0.0;
+  double resolution_;
+  double min_[3] = {0, 0, 0}, max_[3] = {0, 0, 0};
+  bool bounding_box_defined_ = false;
+  std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
+  FastOctTree tree_;
+  // Only when kHoldsLeaves. Mutable as PCL's nodes are: const lookups hand out leaves callers may fill.
+  mutable std::unordered_map<LeafId, LeafNode, LeafIdHash> leaves_;
+  /** The leaf the last point went to (a scan's next point often shares it); copies start without it. */
+  struct LastLeaf {
+    LastLeaf() = default;
+    LastLeaf(const LastLeaf&) {}
+    LastLeaf& operator=(const LastLeaf&) {
+      leaf = nullptr;
+      return *this;
+    }
+    LeafId id{};
+    LeafNode* leaf = nullptr;
+  } last_;
+  std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
+  std::uint64_t version_ = 0;
+  mutable detail::VersionCache<BranchIndex> branch_cache_;  // the branch index of the last walk
+  /**
+   * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
+   * only a deletion beneath it removes. These nested cubes (tree keys) keep getBranchCount exact.
+   */
+  struct Phantom {
+    Key min;
+    uindex_t level;
+  };
+  std::vector<Phantom> phantoms_;
+};
+
+/** PCL's occupancy octree: its leaves are the tree's cells and hold nothing. */
+template <typename PointT, typename LeafContainerT = OctreeContainerEmpty,
+          typename BranchContainerT = OctreeContainerEmpty>
+using OctreePointCloudOccupancy = OctreePointCloud<PointT, LeafContainerT, BranchContainerT>;
+
+}  // namespace fot
+}  // namespace pcl
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_fot/pcl/octree/impl/octree_point_cloud.hpp>
+#endif

@@ -1,0 +1,7 @@
+// OctreePointCloudSearch for each point type.
+#include <pcl_fot/pcl/octree/impl/octree_point_cloud_search.hpp>
+
+#ifndef PCL_NO_PRECOMPILE
+#include "pcl/instantiated_point_types.h"
+PCL_INSTANTIATE(OctreePointCloudSearch, PCL_FOT_INSTANTIATED_POINT_TYPES)
+#endif
