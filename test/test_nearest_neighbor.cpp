@@ -111,7 +111,7 @@ TEST(NearestCellSearch, RandomClustersWithCollapsedCubes) {
 
 PCL_FOT_SCAN_TESTS(NearestCellSearchOnScans);
 
-TEST_P(NearestCellSearchOnScans, RealScansInSpatialOrder) {
+TEST_P(NearestCellSearchOnScans, ScansInSpatialOrder) {
   const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));
@@ -200,7 +200,7 @@ TEST(NearestCellSearch, BatchAnswersAsSingleQueries) {
   EXPECT_EQ(none.nearest(queries, got), 0u) << "an empty map answers no query";
 }
 
-TEST_P(NearestCellSearchOnScans, BatchOnRealScans) {
+TEST_P(NearestCellSearchOnScans, BatchOnScans) {
   const CellGrid grid(0.05);
   FastOctTree target(grid), query_map(grid);
   insertPointCloud(target, *pcl_fot_test::loadScan("room_scan1.pcd"));

@@ -156,7 +156,7 @@ TEST(Psi, CellsFarFromTheOtherMapAgreeWithBruteForce) {
 
 PCL_FOT_SCAN_TESTS(PsiOnScans);
 
-TEST_P(PsiOnScans, TreesAndDistanceMapsAgreeOnRealScans) {
+TEST_P(PsiOnScans, TreesAndDistanceMapsAgreeOnScans) {
   struct Case {
     const char* a;
     const char* b;

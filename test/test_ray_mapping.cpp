@@ -403,7 +403,7 @@ TEST(CastRay, StopsAtTheFirstCellThatIsNotFree) {
 
 PCL_FOT_SCAN_TESTS(CastRayOnScans);
 
-TEST_P(CastRayOnScans, SameAnswerOnTreeAndGridOverARealMap) {
+TEST_P(CastRayOnScans, SameAnswerOnTreeAndGridOverAScanMap) {
   const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
   const CellGrid vg(0.05);
   FastOctTree tree(vg);
