@@ -1,7 +1,9 @@
 # Says in one line how many tests the missing real scans left out: each test binary's "Real/" cases (the same
-# tests run on the synthetic twins) and OTHER_TESTS more (the tools' and the README example's).
+# tests run on the synthetic twins) and OTHER_TESTS more (the tools' and the README example's). BINARIES are
+# separated by "|".
 set(count ${OTHER_TESTS})
-foreach(binary ${BINARIES})
+string(REPLACE "|" ";" binaries "${BINARIES}")
+foreach(binary ${binaries})
   execute_process(COMMAND "${binary}" --gtest_list_tests "--gtest_filter=Real/*" OUTPUT_VARIABLE listing
                   RESULT_VARIABLE failed)
   if(failed)
