@@ -22,7 +22,7 @@
 // The rest is covered elsewhere: every iterator node by node, boxes, deletions and rays on scans
 // (test_octree_point_cloud); each leaf-holding class call for call (test_octree_family_agreement); every
 // search call for call (test_octree_search_agreement). PCL's OctreeBase/Octree2BufBase cases have no pcl::fot
-// counterpart (pcl_octree_1.13/README.md).
+// counterpart: the look-alikes are the point cloud octrees only.
 #include <gtest/gtest.h>
 
 #include <algorithm>
