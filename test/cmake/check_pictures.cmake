@@ -1,15 +1,7 @@
 # Runs a command that draws pictures into DIR, then checks each picture of PICTURES (comma-separated) is there,
 # not empty, and not a single colour. Usage:
 #   cmake -DDIR=<dir> -DPICTURES=<a.png,b.png> -P check_pictures.cmake -- <command that draws them into dir>
-set(cmd)
-set(after_separator OFF)
-foreach(i RANGE 1 ${CMAKE_ARGC})
-  if(after_separator AND DEFINED CMAKE_ARGV${i})
-    list(APPEND cmd "${CMAKE_ARGV${i}}")
-  elseif("${CMAKE_ARGV${i}}" STREQUAL "--")
-    set(after_separator ON)
-  endif()
-endforeach()
+include("${CMAKE_CURRENT_LIST_DIR}/command_after_separator.cmake")
 file(REMOVE_RECURSE "${DIR}")  # whatever is there afterwards, this run drew
 execute_process(COMMAND ${cmd} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT code EQUAL 0)

@@ -5,15 +5,7 @@
 # ONE_LINE_ERROR: stderr must be exactly one line. HELP_IN: every line of stdout must appear in that file.
 # UNCHANGED: files (';'-separated) whose kind (regular file, link, device) and content the run must keep.
 # ABSENT: files that must not exist after the run.
-set(cmd)
-set(after_separator OFF)
-foreach(i RANGE 1 ${CMAKE_ARGC})
-  if(after_separator AND DEFINED CMAKE_ARGV${i})
-    list(APPEND cmd "${CMAKE_ARGV${i}}")
-  elseif("${CMAKE_ARGV${i}}" STREQUAL "--")
-    set(after_separator ON)
-  endif()
-endforeach()
+include("${CMAKE_CURRENT_LIST_DIR}/command_after_separator.cmake")
 if(NOT DEFINED EXIT)
   set(EXIT 0)
 endif()
