@@ -3,7 +3,8 @@
 // raw floats (NaN, Inf, huge, denormal), multiples of 1/64 (ties, duplicates, points on cell faces) or
 // multiples of 10^6. Every point is a query; k-NN and radius results must equal brute force's, distances to
 // the bit, ties to the smaller index. Then, if the input asks, a third of the points are removed and added
-// again under new indices, and every query is asked again.
+// again, every other one under its old index (as FastOctTreeSearch gives removed points' indices to new
+// ones) and the rest under new indices, and every query is asked again.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -108,7 +109,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   };
   check();
   if (!updates) return 0;
-  // Updates in place: every third point held goes, then comes back as point `points + i`.
+  // Updates in place: every third point held goes, then comes back, as point `points + j` or under the index
+  // it had (the indices then come in no order).
   std::vector<std::int32_t> gone;
   std::vector<float> back;
   std::vector<std::pair<const float*, std::int32_t>> kept;
@@ -123,9 +125,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (index.remove(gone.data(), gone.size()) != gone.size()) std::abort();
   held = kept;
   check();
-  const std::int32_t first = std::int32_t(points);
-  if (index.add(back.data(), gone.size(), 3 * sizeof(float), first) != gone.size()) std::abort();
-  for (std::size_t j = 0; j < gone.size(); ++j) held.emplace_back(&back[3 * j], first + std::int32_t(j));
+  std::vector<std::int32_t> again(gone.size());
+  for (std::size_t j = 0; j < gone.size(); ++j) again[j] = j % 2 ? std::int32_t(points + j) : gone[j];
+  if (index.add(back.data(), gone.size(), 3 * sizeof(float), again.data()) != gone.size()) std::abort();
+  for (std::size_t j = 0; j < gone.size(); ++j) held.emplace_back(&back[3 * j], again[j]);
   check();
   return 0;
 }

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstring>
 #include <random>
 #include <stdexcept>
 #include <thread>
 
+#include <pcl/common/common.h>
 #include <pcl/common/point_tests.h>
 
 #include <pcl_fot/detail/worker_threads.h>
@@ -166,12 +168,12 @@ TEST_P(Concurrency, SearchQueriesBetweenUpdates) {
   pcl::PointCloud<pcl::PointXYZ> frames[4];
   for (std::size_t i = 0; i < cloud->size(); ++i) frames[i % 4].push_back((*cloud)[i]);
   search::FastOctTreeSearch<pcl::PointXYZ> window;
-  window.addPoints(frames[0]);
+  pcl::Indices added[4];  // each frame's indices, as addPoints gave them
+  window.addPoints(frames[0], added[0]);
   for (int f = 1; f < 4; ++f) {
-    window.addPoints(frames[f]);
+    window.addPoints(frames[f], added[f]);
     pcl::Indices oldest;
-    for (std::size_t i = 0; i < frames[f - 1].size(); i += 2)
-      oldest.push_back(pcl::index_t(i + (f - 1) * frames[0].size()));
+    for (std::size_t i = 0; i < added[f - 1].size(); i += 2) oldest.push_back(added[f - 1][i]);
     window.removePoints(oldest);
     std::vector<pcl::Indices> serial(frames[f].size() / 17 + 1);
     std::vector<float> d;
@@ -186,6 +188,50 @@ TEST_P(Concurrency, SearchQueriesBetweenUpdates) {
       }
     });
   }
+}
+
+TEST_P(Concurrency, SnapshotsAreReadWhileTheSearchUpdates) {
+  // getInputCloud() is a snapshot: threads read it, and search it with a search of their own, while one
+  // thread slides the window it came from. The window writes to a copy of its own (issue 47: it wrote to
+  // the snapshot in place, reallocating it under the readers). Only the API that predates the fix is used.
+  const auto cloud = pcl_fot_test::loadScan("room_scan1.pcd");
+  pcl::PointCloud<pcl::PointXYZ> frames[6];
+  for (std::size_t i = 0; i < cloud->size(); ++i) frames[i % 6].push_back((*cloud)[i]);
+  Eigen::Vector4f lo, hi;
+  pcl::getMinMax3D(*cloud, lo, hi);
+  search::FastOctTreeSearch<pcl::PointXYZ> window;
+  window.addPoints(frames[0]);
+  window.addPoints(frames[1]);
+  const pcl::PointCloud<pcl::PointXYZ>::ConstPtr snapshot = window.getInputCloud();
+  const pcl::PointCloud<pcl::PointXYZ> before = *snapshot;
+  search::FastOctTreeSearch<pcl::PointXYZ> reader;
+  reader.setInputCloud(snapshot);
+  std::vector<pcl::Indices> serial(snapshot->size() / 17 + 1);
+  std::vector<float> d;
+  for (std::size_t i = 0; i < snapshot->size(); i += 17)
+    reader.nearestKSearch((*snapshot)[i], 3, serial[i / 17], d);
+  together([&](unsigned t) {
+    if (t == 0) {  // the window changes: a frame in, a slab of the room out, its indices free for the next
+      const float step = 0.25f * (hi.x() - lo.x());
+      for (int f = 2; f < 6; ++f) {
+        window.addPoints(frames[f]);
+        const float x = lo.x() + float(f - 2) * step;
+        window.removePoints(Eigen::Vector3f(x, lo.y(), lo.z()), Eigen::Vector3f(x + step, hi.y(), hi.z()));
+      }
+      return;
+    }
+    pcl::Indices idx;
+    std::vector<float> dist;
+    for (int round = 0; round < 3; ++round)
+      for (std::size_t i = 17 * t; i < snapshot->size(); i += 17 * kThreads) {
+        reader.nearestKSearch((*snapshot)[i], 3, idx, dist);
+        ASSERT_EQ(idx, serial[i / 17]);
+      }
+  });
+  ASSERT_EQ(snapshot->size(), before.size());
+  for (std::size_t i = 0; i < before.size(); ++i)
+    ASSERT_EQ(std::memcmp(&(*snapshot)[i].x, &before[i].x, 3 * sizeof(float)), 0) << "point " << i;
+  EXPECT_NE(window.getInputCloud(), snapshot);
 }
 
 TEST_P(Concurrency, OctreeLookAlikeSearchesFromManyThreads) {

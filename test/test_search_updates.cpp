@@ -1,10 +1,13 @@
 // FastOctTreeSearch updated in place: after any sequence of additions and removals, its answers equal brute
-// force over the points held, and a new search of them.
+// force over the points held, and a new search of them. Removed points' indices go to later points, so a
+// window costs the memory of the points it holds; getInputCloud() is a snapshot no update changes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <numeric>
 #include <random>
 
 #include <pcl/common/common.h>
@@ -60,7 +63,8 @@ std::vector<Hit> bruteForce(const Cloud& cloud, const std::vector<bool>& held, c
 
 /** k-NN and radius searches of random queries: the same indices and distances as brute force. */
 void expectBruteForce(const Search& search, const std::vector<bool>& held, std::mt19937& rng) {
-  const Cloud& cloud = *search.getInputCloud();
+  const Cloud none;
+  const Cloud& cloud = search.getInputCloud() ? *search.getInputCloud() : none;
   std::uniform_real_distribution<float> coord(-2.0f, 2.0f);
   pcl::Indices got;
   std::vector<float> d;
@@ -87,6 +91,19 @@ std::size_t heldCount(const std::vector<bool>& held) {
   return std::size_t(std::count(held.begin(), held.end(), true));
 }
 
+/** The same coordinates, bit for bit (NaN included). */
+bool sameXYZ(const PointXYZ& a, const PointXYZ& b) {
+  return std::memcmp(&a.x, &b.x, sizeof(float)) == 0 && std::memcmp(&a.y, &b.y, sizeof(float)) == 0 &&
+         std::memcmp(&a.z, &b.z, sizeof(float)) == 0;
+}
+
+bool sameClouds(const Cloud& a, const Cloud& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!sameXYZ(a[i], b[i])) return false;
+  return true;
+}
+
 }  // namespace
 
 TEST(SearchUpdates, RandomSequencesEqualBruteForce) {
@@ -94,25 +111,55 @@ TEST(SearchUpdates, RandomSequencesEqualBruteForce) {
     std::mt19937 rng(seed);
     // Half the runs start from setInputCloud, half from nothing; half pick their cell edge.
     Search search = seed % 2 ? Search() : Search(0.3);
-    std::vector<bool> held;
-    const auto note = [&](const Cloud& added) {
-      for (const auto& p : added) held.push_back(pcl::isFinite(p));
-    };
+    std::vector<bool> held;  // by index into getInputCloud()
+    std::size_t most_held = 0;
     if (seed % 3 != 0) {
       auto first = std::make_shared<Cloud>(latticeBatch(rng, 300));
       search.setInputCloud(first);
-      note(*first);
+      for (const auto& p : *first) held.push_back(pcl::isFinite(p));
+      most_held = first->size();  // the cloud is the input, NaN points included
     }
+    // Now and then a snapshot is held across a step: the step must leave it as it was.
+    Cloud::ConstPtr snapshot;
+    Cloud snapshot_copy;
     for (int step = 0; step < 40; ++step) {
       const Cloud& cloud = search.getInputCloud() ? *search.getInputCloud() : Cloud();
+      if (rng() % 3 == 0 && search.getInputCloud()) {
+        snapshot = search.getInputCloud();
+        snapshot_copy = *snapshot;
+      }
       switch (rng() % 5) {
         case 0:
         case 1: {
           const Cloud batch = latticeBatch(rng, rng() % 120);
           std::size_t finite = 0;
           for (const auto& p : batch) finite += pcl::isFinite(p);
-          ASSERT_EQ(search.addPoints(batch), finite);
-          note(batch);
+          pcl::Indices ids;
+          ASSERT_EQ(search.addPoints(batch, ids), finite);
+          ASSERT_EQ(ids.size(), batch.size());
+          const Cloud& now = *search.getInputCloud();
+          held.resize(now.size(), false);
+          // Free indices first, lowest first, then the cloud's end: a batch's indices increase, and the
+          // cloud grows only when none is free, so it is as large as the most points held at once.
+          std::vector<bool> was_free(held.size());
+          for (std::size_t i = 0; i < held.size(); ++i) was_free[i] = !held[i];
+          int last = -1;
+          for (std::size_t i = 0; i < batch.size(); ++i) {
+            if (!pcl::isFinite(batch[i])) {
+              ASSERT_EQ(ids[i], pcl::UNAVAILABLE);
+              continue;
+            }
+            ASSERT_GT(ids[i], last);
+            ASSERT_LT(std::size_t(ids[i]), now.size());
+            ASSERT_FALSE(held[std::size_t(ids[i])]) << "index " << ids[i] << " is held already";
+            // No free index below this one was passed over.
+            for (int j = last + 1; j < ids[i]; ++j) ASSERT_FALSE(was_free[std::size_t(j)]) << j;
+            ASSERT_TRUE(sameXYZ(now[std::size_t(ids[i])], batch[i]));
+            held[std::size_t(ids[i])] = true;
+            last = ids[i];
+          }
+          most_held = std::max(most_held, heldCount(held));
+          ASSERT_EQ(now.size(), most_held);
           break;
         }
         case 2: {  // some held, some removed already, some twice
@@ -140,6 +187,10 @@ TEST(SearchUpdates, RandomSequencesEqualBruteForce) {
         }
       }
       ASSERT_EQ(search.size(), heldCount(held));
+      if (snapshot) {
+        ASSERT_TRUE(sameClouds(*snapshot, snapshot_copy)) << "seed " << seed << ", step " << step;
+        snapshot.reset();
+      }
       ASSERT_NO_FATAL_FAILURE(expectBruteForce(search, held, rng)) << "seed " << seed << ", step " << step;
     }
   }
@@ -157,25 +208,31 @@ TEST_P(SearchUpdatesOnScans, AnUpdatedScanAnswersAsANewSearchOfItsPoints) {
   pcl::getMinMax3D(*room, lo, hi);
   const Eigen::Vector3f mid = 0.5f * (lo + hi).head<3>();
   updated.removeOutsideBox(lo.head<3>(), Eigen::Vector3f(mid.x(), hi.y(), hi.z()));
-  updated.addPoints(*other);
+  pcl::Indices added;  // the other scan's points go where the far half and the NaN points were
+  updated.addPoints(*other, added);
   updated.removePoints(mid - Eigen::Vector3f::Constant(0.5f), mid + Eigen::Vector3f::Constant(0.5f));
 
   const Cloud& all = *updated.getInputCloud();
-  ASSERT_EQ(all.size(), room->size() + other->size());
+  EXPECT_LT(all.size(), room->size() + other->size());
+  std::vector<bool> held(all.size(), false);
+  for (std::size_t i = 0; i < room->size(); ++i)
+    held[i] = pcl::isFinite((*room)[i]) && (*room)[i].x <= mid.x();  // the far half went
+  for (const int i : added)
+    if (i != pcl::UNAVAILABLE) held[std::size_t(i)] = true;
   pcl::IndicesPtr survivors(new pcl::Indices);
   pcl::Indices got, want;
   std::vector<float> dg, dw;
   for (std::size_t i = 0; i < all.size(); ++i) {
-    if (!pcl::isFinite(all[i])) continue;
+    if (!held[i]) continue;
     const Eigen::Vector3f p = all[i].getVector3fMap();
     const bool cut = (p.array() >= (mid.array() - 0.5f)).all() && (p.array() <= (mid.array() + 0.5f)).all();
-    const bool far = i < room->size() && p.x() > mid.x();
-    if (!cut && !far) survivors->push_back(int(i));
+    if (!cut) survivors->push_back(int(i));
   }
   ASSERT_EQ(survivors->size(), updated.size());
   Search fresh;
   fresh.setInputCloud(updated.getInputCloud(), survivors);
   for (std::size_t i = 0; i < all.size(); i += 11) {
+    if (!pcl::isFinite(all[i])) continue;  // no results; the placeholder is any point held (see the class)
     for (int k : {1, 10}) {
       ASSERT_EQ(updated.nearestKSearch(all[i], k, got, dg), fresh.nearestKSearch(all[i], k, want, dw));
       ASSERT_EQ(got, want);
@@ -185,8 +242,11 @@ TEST_P(SearchUpdatesOnScans, AnUpdatedScanAnswersAsANewSearchOfItsPoints) {
     ASSERT_EQ(got, want);
   }
   // PCL's index-based queries reach the added points.
-  const int added = int(room->size()) + 3;
-  updated.nearestKSearch(added, 1, got, dg);
+  const auto one = std::find_if(added.begin(), added.end(), [&](int i) {
+    return i != pcl::UNAVAILABLE && std::binary_search(survivors->begin(), survivors->end(), i);
+  });
+  ASSERT_NE(one, added.end());
+  updated.nearestKSearch(*one, 1, got, dg);
   EXPECT_EQ(dg[0], 0.0f);
 }
 
@@ -198,24 +258,30 @@ TEST(SearchUpdates, EmptiedAndRefilled) {
   batch.push_back(PointXYZ(1, 2, 3));
   batch.push_back(PointXYZ(kNaN, 2, 3));
   batch.push_back(PointXYZ(1, 2, 3.5f));
-  EXPECT_EQ(search.addPoints(batch), 2u);  // no input cloud before: the additions are the cloud
+  pcl::Indices ids;
+  EXPECT_EQ(search.addPoints(batch, ids), 2u);  // no input cloud before: the additions are the cloud
+  EXPECT_EQ(ids, (pcl::Indices{0, pcl::UNAVAILABLE, 1}));  // the NaN point takes no index
+  EXPECT_EQ(search.getInputCloud()->size(), 2u);
   EXPECT_EQ(search.getSkippedCount(), 1u);
   EXPECT_EQ(search.nearestKSearch(PointXYZ(1, 2, 3.4f), 1, got, d), 1);
-  EXPECT_EQ(got[0], 2);
+  EXPECT_EQ(got[0], 1);
   EXPECT_EQ(search.removeOutsideBox(Eigen::Vector3f(5, 5, 5), Eigen::Vector3f(6, 6, 6)), 2u);
   EXPECT_EQ(search.size(), 0u);
   EXPECT_EQ(search.nearestKSearch(PointXYZ(1, 2, 3), 1, got, d), 0);
   EXPECT_EQ(search.radiusSearch(PointXYZ(1, 2, 3), 10.0, got, d), 0);
-  // Refilled far away, in UTM-like coordinates: the grid fits the new points, the indices go on.
+  // Refilled far away, in UTM-like coordinates: the grid fits the new points, which take the freed indices.
   Cloud far;
   far.push_back(PointXYZ(512345.5f, 5412345.0f, 80.0f));
   far.push_back(PointXYZ(512346.0f, 5412345.0f, 80.0f));
-  EXPECT_EQ(search.addPoints(far), 2u);
+  EXPECT_EQ(search.addPoints(far, ids), 2u);
+  EXPECT_EQ(ids, (pcl::Indices{0, 1}));
+  EXPECT_EQ(search.getInputCloud()->size(), 2u);
   EXPECT_EQ(search.nearestKSearch(PointXYZ(512345.9f, 5412345.0f, 80.0f), 2, got, d), 2);
-  EXPECT_EQ(got, (pcl::Indices{4, 3}));
-  EXPECT_EQ(search.removePoints(pcl::Indices{0, 1, 2, 4}), 1u);
+  EXPECT_EQ(got, (pcl::Indices{1, 0}));
+  // UNAVAILABLE, as addPoints gives a skipped point, is passed over.
+  EXPECT_EQ(search.removePoints(pcl::Indices{1, 1, pcl::UNAVAILABLE}), 1u);
   EXPECT_EQ(search.nearestKSearch(PointXYZ(1, 2, 3), 1, got, d), 1);
-  EXPECT_EQ(got[0], 3);
+  EXPECT_EQ(got[0], 0);
 }
 
 TEST(SearchUpdates, BadInputGetsAnErrorAndChangesNothing) {
@@ -224,7 +290,8 @@ TEST(SearchUpdates, BadInputGetsAnErrorAndChangesNothing) {
   Search search;
   search.setInputCloud(cloud);
   EXPECT_EQ(search.removePoints(pcl::Indices{3, 50}), 0u);  // 50 lies outside the cloud
-  EXPECT_EQ(search.removePoints(pcl::Indices{-1}), 0u);
+  EXPECT_EQ(search.removePoints(pcl::Indices{3, -2}), 0u);
+  EXPECT_EQ(search.removePoints(pcl::Indices{-1}), 0u);  // UNAVAILABLE: passed over
   EXPECT_EQ(search.size(), 50u);
   const float nan = kNaN;
   EXPECT_EQ(search.removePoints(Eigen::Vector3f(nan, 0, 0), Eigen::Vector3f(1, 1, 1)), 0u);
@@ -263,4 +330,143 @@ TEST_P(SearchUpdatesOnScans, ACrowdedMapPicksItsCellsAnewAndAnswersAlike) {
     ASSERT_EQ(got, want);
     ASSERT_EQ(dg, dw);
   }
+}
+
+// Issue 47, the first defect: removed points stayed in getInputCloud() and in the index's table by index, so
+// a window's memory grew with every point ever added. Only the API that predates the fix is used here.
+TEST(SearchUpdates, AWindowCostsTheMemoryOfThePointsItHolds) {
+  constexpr std::size_t kPerFrame = 2000, kWindow = 5;
+  constexpr int kFrames = 400;
+  std::mt19937 rng(47);
+  // Frame f fills the slab x in [f, f + 1): a sensor moving along x. The window keeps the last 5 frames.
+  const auto frame = [&](int f) {
+    Cloud c;
+    for (std::size_t i = 0; i < kPerFrame; ++i)
+      c.push_back(PointXYZ(float(f) + float(rng() % 1000) / 1000.0f, float(rng() % 4000) / 1000.0f,
+                           float(rng() % 4000) / 1000.0f));
+    return c;
+  };
+  Search window;
+  std::size_t bytes_early = 0;
+  for (int f = 0; f < kFrames; ++f) {
+    ASSERT_EQ(window.addPoints(frame(f)), kPerFrame);
+    window.removeOutsideBox(Eigen::Vector3f(float(f) - float(kWindow) + 1.0f, -1.0f, -1.0f),
+                            Eigen::Vector3f(float(f) + 1.0f, 5.0f, 5.0f));
+    ASSERT_EQ(window.size(), std::min<std::size_t>(std::size_t(f) + 1, kWindow) * kPerFrame);
+    if (f == 40) bytes_early = window.getPointIndex().getMemoryBytes();
+  }
+  // The cloud holds as many points as the window did at its fullest (a frame added, the oldest not yet
+  // removed), not the 800,000 added; the index's memory stays as it was after 40 frames. Before the fix:
+  // 800,000 points, and the table by index alone took 8 bytes for each.
+  EXPECT_LE(window.getInputCloud()->size(), (kWindow + 1) * kPerFrame);
+  EXPECT_LT(window.getPointIndex().getMemoryBytes(), 3 * bytes_early);
+  // And it still answers as a new search of the points it holds.
+  Search fresh;
+  pcl::IndicesPtr held(new pcl::Indices);
+  const Cloud& all = *window.getInputCloud();
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (all[i].x >= float(kFrames) - float(kWindow)) held->push_back(int(i));
+  ASSERT_EQ(held->size(), window.size());
+  fresh.setInputCloud(window.getInputCloud(), held);
+  pcl::Indices got, want;
+  std::vector<float> dg, dw;
+  for (std::size_t i = 0; i < all.size(); i += 37) {
+    ASSERT_EQ(window.nearestKSearch(all[i], 4, got, dg), fresh.nearestKSearch(all[i], 4, want, dw));
+    ASSERT_EQ(got, want);
+  }
+}
+
+// Issue 47, the second defect: addPoints(*getInputCloud()) appended the cloud to itself while reading it,
+// then indexed the doubled cloud as the added points: twice the points, indices past the cloud's end.
+TEST(SearchUpdates, TheSearchsOwnCloudCanBeAddedToIt) {
+  auto cloud = std::make_shared<Cloud>();
+  for (int i = 0; i < 100; ++i) cloud->push_back(PointXYZ(0.1f * float(i), 0.05f * float(i % 7), 0.0f));
+  Search search;
+  search.setInputCloud(cloud);
+  ASSERT_EQ(search.addPoints(*cloud), 100u);  // the search's own cloud from here on: 200 points
+  {
+    const Cloud& own = *search.getInputCloud();  // a reference only: no snapshot is held
+    EXPECT_EQ(search.addPoints(own), 200u);
+  }
+  EXPECT_EQ(search.addPoints(*search.getInputCloud()), 400u);
+  const Cloud& all = *search.getInputCloud();
+  ASSERT_EQ(all.size(), 800u);
+  EXPECT_EQ(search.size(), 800u);
+  for (std::size_t i = 0; i < all.size(); ++i) ASSERT_TRUE(sameXYZ(all[i], (*cloud)[i % 100])) << i;
+  std::mt19937 rng(2);
+  ASSERT_NO_FATAL_FAILURE(expectBruteForce(search, std::vector<bool>(all.size(), true), rng));
+}
+
+// Issue 47, the third defect: a cloud from getInputCloud() changed under its holder at the next addPoints
+// (and was reallocated, under a reader on another thread: Concurrency.SnapshotsAreReadWhileTheSearchUpdates).
+TEST(SearchUpdates, AHeldCloudIsASnapshot) {
+  std::mt19937 rng(3);
+  Search search(0.25);
+  ASSERT_GT(search.addPoints(latticeBatch(rng, 200)), 0u);  // the search's own cloud from here on
+  const Cloud::ConstPtr snapshot = search.getInputCloud();
+  const Cloud before = *snapshot;
+  search.removePoints(pcl::Indices{0, 1, 2, 3, 4, 5, 6, 7});
+  search.addPoints(latticeBatch(rng, 50));
+  search.removeOutsideBox(Eigen::Vector3f(-1, -1, -1), Eigen::Vector3f(1, 1, 1));
+  search.addPoints(latticeBatch(rng, 80));
+  EXPECT_TRUE(sameClouds(*snapshot, before));
+  EXPECT_NE(search.getInputCloud(), snapshot);
+  // With no snapshot held, an update writes the search's cloud in place: no copy.
+  const Cloud* own = search.getInputCloud().get();
+  search.addPoints(latticeBatch(rng, 30));
+  search.removePoints(pcl::Indices{9});
+  EXPECT_EQ(search.getInputCloud().get(), own);
+  // A search of the snapshot answers for the points it held, whatever the other search does meanwhile.
+  Search reader(0.25);
+  reader.setInputCloud(snapshot);
+  std::vector<bool> held(before.size());
+  for (std::size_t i = 0; i < before.size(); ++i) held[i] = pcl::isFinite(before[i]);
+  search.addPoints(latticeBatch(rng, 100));
+  ASSERT_EQ(reader.getInputCloud()->size(), held.size());
+  ASSERT_NO_FATAL_FAILURE(expectBruteForce(reader, held, rng));
+}
+
+TEST(SearchUpdates, RemovedIndicesGoToLaterPointsLowestFirst) {
+  Search search(0.5);
+  Cloud ten;
+  for (int i = 0; i < 10; ++i) ten.push_back(PointXYZ(float(i), 0.0f, 0.0f));
+  pcl::Indices ids, want(10);
+  ASSERT_EQ(search.addPoints(ten, ids), 10u);
+  std::iota(want.begin(), want.end(), 0);
+  EXPECT_EQ(ids, want);
+  EXPECT_EQ(search.removePoints(pcl::Indices{7, 3}), 2u);
+  Cloud more;
+  more.push_back(PointXYZ(100.0f, 0.0f, 0.0f));
+  more.push_back(PointXYZ(kNaN, 0.0f, 0.0f));
+  more.push_back(PointXYZ(101.0f, 0.0f, 0.0f));
+  more.push_back(PointXYZ(102.0f, 0.0f, 0.0f));
+  ASSERT_EQ(search.addPoints(more, ids), 3u);
+  EXPECT_EQ(ids, (pcl::Indices{3, pcl::UNAVAILABLE, 7, 10}));
+  const Cloud& all = *search.getInputCloud();
+  ASSERT_EQ(all.size(), 11u);
+  EXPECT_EQ(all[3].x, 100.0f);
+  EXPECT_EQ(all[7].x, 101.0f);
+  EXPECT_EQ(all[10].x, 102.0f);
+  pcl::Indices got;
+  std::vector<float> d;
+  EXPECT_EQ(search.nearestKSearch(PointXYZ(101.2f, 0.0f, 0.0f), 2, got, d), 2);
+  EXPECT_EQ(got, (pcl::Indices{7, 10}));
+  EXPECT_EQ(search.nearestKSearch(PointXYZ(3.1f, 0.0f, 0.0f), 1, got, d), 1);
+  EXPECT_EQ(got[0], 4);  // not 3: that is the point at x = 100 now
+  // The batch's indices, UNAVAILABLE included, remove the batch.
+  EXPECT_EQ(search.removePoints(ids), 3u);
+  EXPECT_EQ(search.size(), 8u);
+  // The points the input does not hold (not finite, or not among its indices) leave their indices free too;
+  // the caller's cloud is not written.
+  auto input = std::make_shared<Cloud>();
+  for (int i = 0; i < 6; ++i) input->push_back(PointXYZ(float(i), 0.0f, 0.0f));
+  (*input)[1].x = kNaN;
+  search.setInputCloud(input, pcl::IndicesPtr(new pcl::Indices{0, 2, 4}));
+  EXPECT_EQ(search.size(), 3u);
+  ASSERT_EQ(search.addPoints(more, ids), 3u);
+  EXPECT_EQ(ids, (pcl::Indices{1, pcl::UNAVAILABLE, 3, 5}));
+  EXPECT_EQ(search.getInputCloud()->size(), 6u);
+  EXPECT_TRUE(std::isnan((*input)[1].x));
+  EXPECT_EQ((*input)[3].x, 3.0f);
+  EXPECT_EQ((*search.getInputCloud())[3].x, 101.0f);
 }

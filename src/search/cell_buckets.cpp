@@ -1,5 +1,7 @@
 #include <pcl_fot/search/cell_buckets.h>
 
+#include <algorithm>
+
 namespace pcl {
 namespace fot {
 namespace detail {
@@ -24,8 +26,8 @@ std::size_t CellBuckets::probe(const Key& cell) const {
   return i;
 }
 
-void CellBuckets::grow() {
-  std::vector<Slot> old(slots_.empty() ? 16 : 2 * slots_.size());
+void CellBuckets::rehash(std::size_t size) {
+  std::vector<Slot> old(size);
   old.swap(slots_);
   for (const Slot& s : old)
     if (s.bucket != kFree) slots_[probe(s.cell)] = s;
@@ -45,8 +47,7 @@ void CellBuckets::erase(std::size_t i) {
 }
 
 bool CellBuckets::add(const Key& cell, const float p[3], std::int32_t index) {
-  // The cells held: one per bucket in use.
-  if (2 * (buckets_.size() - spare_.size() + 1) > slots_.size()) grow();
+  if (2 * (cells() + 1) > slots_.size()) rehash(slots_.empty() ? 16 : 2 * slots_.size());
   const std::size_t i = probe(cell);
   const bool fresh = slots_[i].bucket == kFree;
   if (fresh) {
@@ -85,6 +86,17 @@ bool CellBuckets::remove(std::int32_t index, Key& cell, bool& emptied) {
   if (emptied) {
     erase(probe(cell));
     spare_.push_back(b);
+    // A spare bucket keeps a few points' storage for the next cell, no more; the table halves once an
+    // eighth of it is used (it doubles at a half), so memory follows the cells held.
+    if (bucket.capacity() > kKeptCapacity) std::vector<BucketPoint>().swap(bucket);
+    if (slots_.size() > 16 && 8 * cells() < slots_.size()) rehash(slots_.size() / 2);
+  } else if (bucket.capacity() > kKeptCapacity && 4 * bucket.size() < bucket.capacity()) {
+    // A bucket thinned out to a quarter: half its storage goes, O(1) a point in the long run. The points
+    // keep their positions, so where_ holds.
+    std::vector<BucketPoint> smaller;
+    smaller.reserve(std::max(kKeptCapacity, 2 * bucket.size()));
+    smaller.assign(bucket.begin(), bucket.end());
+    bucket.swap(smaller);
   }
   return true;
 }

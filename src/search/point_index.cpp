@@ -486,38 +486,79 @@ void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber
 
 std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t stride_bytes,
                             std::int32_t first_index) {
-  const char* bytes = reinterpret_cast<const char*>(xyz);
-  const auto point = [&](std::size_t i) { return reinterpret_cast<const float*>(bytes + i * stride_bytes); };
   if (first_index < 0) throw std::invalid_argument("pcl::fot::PointIndex::add: a negative first index");
-  makeUpdatable(0);
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  std::vector<std::int32_t> indices(count, -1);
   for (std::size_t i = 0; i < count; ++i) {
-    if (!finite3(point(i))) continue;
+    if (!finite3(reinterpret_cast<const float*>(bytes + i * stride_bytes))) continue;
     if (std::uint64_t(first_index) + i > std::uint64_t(std::numeric_limits<std::int32_t>::max()))
       throw std::invalid_argument("pcl::fot::PointIndex::add: an index past INT32_MAX");
-    if (buckets_.contains(std::int32_t(first_index + std::int64_t(i))))
-      throw std::invalid_argument("pcl::fot::PointIndex::add: index " + std::to_string(first_index + i) +
-                                  " is held already");
+    indices[i] = std::int32_t(first_index + std::int64_t(i));
   }
+  return add(xyz, count, stride_bytes, indices.data());
+}
+
+std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t stride_bytes,
+                            const std::int32_t* indices) {
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  const auto point = [&](std::size_t i) { return reinterpret_cast<const float*>(bytes + i * stride_bytes); };
+  const auto taken = [&](std::size_t i) { return indices[i] >= 0 && finite3(point(i)); };
+  makeUpdatable(0);
+  // The checks come first, so that a bad index adds none: none held already, none given twice. Indices in
+  // increasing order, as FastOctTreeSearch and the overload above give them, are distinct as they are.
+  std::size_t taking = 0, finite = 0;
+  std::int32_t first_taken = -1, last = -1;
+  bool increasing = true;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!finite3(point(i))) continue;
+    ++finite;
+    if (indices[i] < 0) continue;
+    if (buckets_.contains(indices[i]))
+      throw std::invalid_argument("pcl::fot::PointIndex::add: index " + std::to_string(indices[i]) +
+                                  " is held already");
+    if (taking++ == 0) first_taken = indices[i];
+    increasing = increasing && indices[i] > last;
+    last = indices[i];
+  }
+  if (!increasing) {
+    std::vector<std::int32_t> sorted;
+    sorted.reserve(taking);
+    for (std::size_t i = 0; i < count; ++i)
+      if (taken(i)) sorted.push_back(indices[i]);
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    if (twice != sorted.end())
+      throw std::invalid_argument("pcl::fot::PointIndex::add: index " + std::to_string(*twice) +
+                                  " is given twice");
+  }
+  if (taking == 0) return 0;
   if (size() == 0) {  // nothing to keep: the grid fits itself to these points
-    build(xyz, count, stride_bytes);
-    makeUpdatable(first_index);
+    if (taking == finite) {
+      build(xyz, count, stride_bytes);
+    } else {
+      std::vector<std::int32_t> subset;
+      subset.reserve(taking);
+      for (std::size_t i = 0; i < count; ++i)
+        if (taken(i)) subset.push_back(std::int32_t(i));
+      build(xyz, count, stride_bytes, subset.data(), subset.size());
+    }
+    makeUpdatable(0, indices);  // build numbered the points by their place in the batch
     return size();
   }
   const std::size_t before = size();
   Accessor writer(tree_);
   const CellGrid& grid = tree_.getGrid();
   for (std::size_t i = 0; i < count; ++i) {
+    if (!taken(i)) continue;
     const float* p = point(i);
-    if (!finite3(p)) continue;
-    const std::int32_t index = std::int32_t(first_index + std::int64_t(i));
     Key key;
     if (!grid.pointToKey(p[0], p[1], p[2], key)) {
-      buckets_.add(kOutliers, p, index);
-    } else if (buckets_.add(key, p, index)) {
+      buckets_.add(kOutliers, p, indices[i]);
+    } else if (buckets_.add(key, p, indices[i])) {
       writer.setValidCell(key, CellState::Occupied);
     }
   }
-  if (any_ < 0 && size() > 0) any_ = first_index;
+  if (any_ < 0) any_ = first_taken;
   const std::size_t added = size() - before;
   refitGrid();
   changed();
@@ -545,7 +586,8 @@ void PointIndex::refitGrid() {
   makeUpdatable(0, ids.data());
 }
 
-std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
+std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count,
+                               std::vector<std::int32_t>* removed_indices) {
   makeUpdatable(0);
   Accessor writer(tree_);
   std::size_t removed = 0;
@@ -554,6 +596,7 @@ std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
     bool emptied;
     if (!buckets_.remove(indices[i], cell, emptied)) continue;
     ++removed;
+    if (removed_indices) removed_indices->push_back(indices[i]);
     if (emptied && cell != kOutliers) writer.setValidCell(cell, CellState::Unknown);
   }
   if (removed > 0) {
@@ -567,7 +610,8 @@ std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count) {
   return removed;
 }
 
-std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool inside) {
+std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool inside,
+                                  std::vector<std::int32_t>* removed) {
   makeUpdatable(0);
   std::vector<std::int32_t> doomed;
   buckets_.forEachPoint([&](const detail::BucketPoint& p) {
@@ -575,7 +619,7 @@ std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool ins
                     p.p[2] >= lo[2] && p.p[2] <= hi[2];
     if (in == inside) doomed.push_back(p.index);
   });
-  return remove(doomed.data(), doomed.size());
+  return remove(doomed.data(), doomed.size(), removed);
 }
 
 void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed) {

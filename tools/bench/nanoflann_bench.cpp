@@ -248,10 +248,8 @@ std::string slidingWindow(int repeats, std::vector<std::string>& verdicts) {
             sum += double(dist[0]);
           }
         });
-      const std::size_t first = s.getInputCloud() ? s.getInputCloud()->size() : 0;
-      s.addPoints(frame);
-      held.emplace_back(frame.size());
-      std::iota(held.back().begin(), held.back().end(), pcl::index_t(first));
+      held.emplace_back();
+      s.addPoints(frame, held.back());  // each point's index: a removed point's, or past the cloud's end
       if (held.size() > w.window) {
         s.removePoints(held.front());
         held.pop_front();

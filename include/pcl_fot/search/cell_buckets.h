@@ -20,6 +20,12 @@ struct BucketPoint {
  * The updatable half of a PointIndex: each cell's points in a bucket of their own, found by the cell's key
  * in an open-addressing table, and each point's place found by its index. Adding or removing a point moves
  * no other point but the last of its bucket, so updates cost O(1) whatever the index holds.
+ *
+ * Memory follows the points held, not those ever added: a bucket that empties gives back its storage (but
+ * for a few points' worth, kept for the next cell), one that thins out to a quarter shrinks, and the table
+ * of cells halves when an eighth of it is used. The table by index is as long as the largest index held
+ * (+1): a caller that reuses the indices of removed points (as FastOctTreeSearch does) keeps it as short as
+ * the most points it held at once.
  */
 class CellBuckets {
  public:
@@ -60,10 +66,16 @@ class CellBuckets {
     std::uint32_t bucket = kFree;
   };
 
+  /** A bucket keeps up to this many points' storage when it empties or shrinks. */
+  static constexpr std::size_t kKeptCapacity = 16;
+
   std::size_t home(const Key& cell) const;
   /** The slot of `cell`, or the free slot where it would go. */
   std::size_t probe(const Key& cell) const;
-  void grow();
+  /** The cells held: one per bucket in use. */
+  std::size_t cells() const { return buckets_.size() - spare_.size(); }
+  /** Moves the cells into a table of `size` slots, a power of two. */
+  void rehash(std::size_t size);
   /** Frees slot i and shifts back the entries after it that probed past it. */
   void erase(std::size_t i);
 

@@ -57,13 +57,25 @@ class PointIndex {
    * held already or would pass INT32_MAX, or first_index is negative.
    */
   std::size_t add(const float* xyz, std::size_t count, std::size_t stride_bytes, std::int32_t first_index);
-  /** Removes the points with these indices; returns how many of them were held. */
-  std::size_t remove(const std::int32_t* indices, std::size_t count);
+  /**
+   * Adds point i (at byte offset i * stride_bytes) as index `indices[i]`, or leaves it out if that is
+   * negative or the point is not finite: a caller may give the indices of removed points again, so that
+   * the table by index stays as long as the most points held at once (FastOctTreeSearch does). Returns how
+   * many were added. Throws std::invalid_argument, adding none, if an index is held already or given twice.
+   */
+  std::size_t add(const float* xyz, std::size_t count, std::size_t stride_bytes, const std::int32_t* indices);
+  /**
+   * Removes the points with these indices; returns how many of them were held. If `removed` is given, their
+   * indices are appended to it, each once.
+   */
+  std::size_t remove(const std::int32_t* indices, std::size_t count,
+                     std::vector<std::int32_t>* removed = nullptr);
   /**
    * Removes the points inside the box [lo, hi], bounds included, or with inside = false those outside it;
-   * returns how many.
+   * returns how many, and appends their indices to `removed` if it is given.
    */
-  std::size_t removeBox(const float lo[3], const float hi[3], bool inside);
+  std::size_t removeBox(const float lo[3], const float hi[3], bool inside,
+                        std::vector<std::int32_t>* removed = nullptr);
 
   /** Points indexed: the finite ones of those given to build, then added and not removed. */
   std::size_t size() const { return updatable_ ? buckets_.size() : index_.size(); }

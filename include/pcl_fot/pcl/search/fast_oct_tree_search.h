@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include <pcl/pcl_base.h>
 #include <pcl/pcl_config.h>
 #include <pcl/search/kdtree.h>
 
@@ -33,12 +34,21 @@ namespace search {
  * Only x, y, z are used; a custom point representation is ignored.
  *
  * The index also updates in place, for maps that grow and forget (odometry, a sliding window, ICP against
- * a growing map): addPoints, removePoints and removeOutsideBox. Indices stay stable: added points are
- * numbered after the input cloud's, and getInputCloud() returns the input with them appended (a copy the
- * search keeps from the first addPoints on); removed points keep their place in it and are no longer found.
+ * a growing map): addPoints, removePoints and removeOutsideBox. Indices are places in getInputCloud(), a
+ * cloud the search keeps from the first addPoints on (a copy of the input; the caller's cloud is never
+ * written). A point keeps its index while it is held. A removed point is no longer found, and its index is
+ * free: a point added later may get it (the lowest free index first), else the cloud grows by one. So the
+ * cloud, and the index, take memory for the most points held at once, not for every point ever added, and
+ * INT32_MAX bounds the points held, not those added. addPoints tells the caller the index of each point.
+ *
+ * getInputCloud() returns a snapshot: no later update changes the cloud it points to. An update writes to
+ * the search's own cloud in place while no one else holds it, and to a copy of it otherwise (one copy of the
+ * cloud at that update). Indices in results refer to the cloud getInputCloud() returns after the update,
+ * so give PCL algorithms that keep a cloud (ICP's target) the new one after each update.
+ *
  * Results after any updates equal those of a new search of the points held. No query may run during an
- * update: queries are const and may run from many threads at once, updates are not. setInputCloud starts
- * over from the cloud it is given.
+ * update: queries are const and may run from many threads at once, updates are not; a snapshot may be read
+ * from any thread during an update. setInputCloud starts over from the cloud it is given.
  */
 template <typename PointT>
 class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
@@ -72,14 +82,22 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
                    std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override;
 
   /**
-   * Adds the points of `cloud`: point i gets index n + i, where n is the input cloud's size before the call.
-   * Those that are not finite are skipped (counted by getSkippedCount) but keep their index. Returns how
-   * many were added.
+   * Adds the points of `cloud`, each at an index into getInputCloud(): the lowest index a removed point
+   * left free, else one past the cloud's end; a batch's indices increase with its points. Those that are
+   * not finite are skipped (counted by getSkippedCount) and take no index. Returns how many were added.
+   * `cloud` may be getInputCloud() itself. If the points held would pass INT32_MAX, it is an error
+   * (PCL_ERROR) and none are added.
    */
   std::size_t addPoints(const PointCloud& cloud);
   /**
-   * Removes the points with these indices; returns how many were held. An index outside the input cloud is
-   * an error (PCL_ERROR): then nothing is removed.
+   * As addPoints(cloud); indices[i] is then the index point i got, or pcl::UNAVAILABLE (-1) if it was
+   * skipped. Pass them to removePoints to remove the batch.
+   */
+  std::size_t addPoints(const PointCloud& cloud, Indices& indices);
+  /**
+   * Removes the points with these indices; returns how many were held. Their indices may be given to points
+   * added later. pcl::UNAVAILABLE (-1) is passed over; any other index outside the input cloud is an error
+   * (PCL_ERROR): then nothing is removed.
    */
   std::size_t removePoints(const Indices& indices);
   /** Removes the points inside the box [min_pt, max_pt], bounds included; returns how many. */
@@ -145,6 +163,18 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   /** A box's removal (inside or outside), after its check. */
   std::size_t removeBox(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt, bool inside,
                         const char* caller);
+  /**
+   * At the first update since setInputCloud: the free indices are those of the input's points the index
+   * does not hold (not finite, or not among its indices).
+   */
+  void trackFreeIndices();
+  /** The indices of removed points become free. */
+  void freeIndices(const std::vector<std::int32_t>& removed);
+  /**
+   * The cloud an update writes: the search's own, a copy of the input made at the first update, and copied
+   * again whenever someone else holds it (a snapshot from getInputCloud()), which then stays as it was.
+   */
+  PointCloud& writableCloud();
   /** Runs query(i) for i in [0, n), split into contiguous runs over the threads. */
   template <typename Query>
   void forEachQuery(std::size_t n, Query&& query) const;
@@ -152,7 +182,9 @@ class FastOctTreeSearch : public pcl::search::KdTree<PointT> {
   PointIndex index_;
   Metric metric_ = Metric::Euclidean;
   Source built_;
-  shared_ptr<PointCloud> grown_;  // the input with the added points, once there are any
+  shared_ptr<PointCloud> grown_;  // the search's own cloud, input_ too, from the first addPoints on
+  std::vector<index_t> free_;     // indices no point holds, below the cloud's size: a min-heap
+  bool tracking_ = false;         // free_ is known: an update has run since setInputCloud
   std::size_t skipped_ = 0;
   unsigned threads_ = 1;
 };

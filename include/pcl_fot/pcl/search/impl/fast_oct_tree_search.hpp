@@ -1,6 +1,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
 #include <limits>
 
 #include <pcl/console/print.h>
@@ -11,6 +13,14 @@
 
 namespace pcl {
 namespace fot {
+namespace detail {
+/** Finite coordinates: a point a PointIndex holds (it leaves out the others). */
+template <typename PointT>
+inline bool finiteXYZ(const PointT& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+}  // namespace detail
+
 namespace search {
 
 template <typename PointT>
@@ -58,29 +68,107 @@ FastOctTreeSearch<PointT>::setInputCloud(const PointCloudConstPtr& cloud, const 
     skipped_ = (indices ? indices->size() : (cloud ? cloud->size() : 0)) - index_.size();
   }
   grown_.reset();
+  std::vector<index_t>().swap(free_);
+  tracking_ = false;
 #if PCL_VERSION_COMPARE(>=, 1, 14, 0)
   return cloud != nullptr;
 #endif
 }
 
 template <typename PointT>
-std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud) {
-  if (!grown_) {
+void FastOctTreeSearch<PointT>::trackFreeIndices() {
+  if (tracking_) return;
+  tracking_ = true;
+  free_.clear();
+  if (!this->input_) return;
+  const PointCloud& input = *this->input_;
+  std::vector<bool> listed(input.size(), !this->indices_);
+  if (this->indices_)
+    for (const index_t i : *this->indices_)
+      if (i >= 0 && std::size_t(i) < input.size()) listed[std::size_t(i)] = true;
+  for (std::size_t i = 0; i < input.size(); ++i)
+    if (!listed[i] || !detail::finiteXYZ(input[i])) free_.push_back(index_t(i));
+  // Increasing: a min-heap as it is.
+}
+
+template <typename PointT>
+void FastOctTreeSearch<PointT>::freeIndices(const std::vector<std::int32_t>& removed) {
+  const auto lowest_first = std::greater<index_t>();
+  if (removed.size() > free_.size() / 8) {
+    free_.insert(free_.end(), removed.begin(), removed.end());
+    std::make_heap(free_.begin(), free_.end(), lowest_first);
+  } else {
+    for (const std::int32_t i : removed) {
+      free_.push_back(index_t(i));
+      std::push_heap(free_.begin(), free_.end(), lowest_first);
+    }
+  }
+}
+
+template <typename PointT>
+typename FastOctTreeSearch<PointT>::PointCloud& FastOctTreeSearch<PointT>::writableCloud() {
+  if (!grown_ || this->input_ != grown_) {
+    // The first addPoints since setInputCloud: the input is the caller's, and never written.
     grown_ = this->input_ ? make_shared<PointCloud>(*this->input_) : make_shared<PointCloud>();
     this->input_ = grown_;
-    built_ = Source{};
+  } else if (grown_.use_count() > 2) {
+    // grown_ and input_ are the search's own references: any other is a snapshot, and keeps its cloud.
+    grown_ = make_shared<PointCloud>(*grown_);
+    this->input_ = grown_;
   }
-  const std::size_t first = grown_->size();
-  if (cloud.empty()) return 0;
-  if (first + cloud.size() > std::size_t(std::numeric_limits<index_t>::max())) {
+  return *grown_;
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud) {
+  Indices indices;
+  return addPoints(cloud, indices);
+}
+
+template <typename PointT>
+std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud, Indices& indices) {
+  trackFreeIndices();
+  std::size_t finite = 0;
+  for (const PointT& p : cloud) finite += detail::finiteXYZ(p);
+  const std::size_t slots = this->input_ ? this->input_->size() : 0;
+  const std::size_t appended = finite > free_.size() ? finite - free_.size() : 0;
+  if (slots + appended > std::size_t(std::numeric_limits<index_t>::max())) {
     PCL_ERROR(
-        "[pcl::fot::search::FastOctTreeSearch::addPoints] %zu points would pass the largest index; "
-        "none added.\n",
-        cloud.size());
+        "[pcl::fot::search::FastOctTreeSearch::addPoints] %zu points would pass the largest index, with "
+        "%zu held; none added.\n",
+        finite, index_.size());
+    indices.assign(cloud.size(), UNAVAILABLE);
     return 0;
   }
-  grown_->insert(grown_->end(), cloud.begin(), cloud.end());
-  const std::size_t added = index_.add(&cloud[0].x, cloud.size(), sizeof(PointT), index_t(first));
+  indices.resize(cloud.size());
+  if (cloud.empty()) {
+    if (!this->input_) writableCloud();  // the search's cloud, empty, as after any addPoints
+    return 0;
+  }
+  // addPoints(*getInputCloud()): the points are read from that cloud as it was. Holding it here keeps it
+  // alive, and sends the writes to a copy (as for any snapshot).
+  shared_ptr<const PointCloud> argument;
+  if (this->input_ && &cloud == this->input_.get()) argument = this->input_;
+  PointCloud& own = writableCloud();
+  // Free indices first, lowest first, then the cloud's end: a batch's indices increase.
+  const auto lowest_first = std::greater<index_t>();
+  index_t end = index_t(own.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!detail::finiteXYZ(cloud[i])) {
+      indices[i] = UNAVAILABLE;
+    } else if (!free_.empty()) {
+      std::pop_heap(free_.begin(), free_.end(), lowest_first);
+      indices[i] = free_.back();
+      free_.pop_back();
+    } else {
+      indices[i] = end++;
+    }
+  }
+  if (std::size_t(end) > own.size()) own.resize(std::size_t(end));
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (indices[i] != UNAVAILABLE) own[std::size_t(indices[i])] = cloud[i];
+  built_ = Source{};
+  const std::size_t added = index_.add(&cloud[0].x, cloud.size(), sizeof(PointT), indices.data());
   skipped_ += cloud.size() - added;
   return added;
 }
@@ -89,15 +177,19 @@ template <typename PointT>
 std::size_t FastOctTreeSearch<PointT>::removePoints(const Indices& indices) {
   const std::size_t n = this->input_ ? this->input_->size() : 0;
   for (const index_t i : indices)
-    if (i < 0 || std::size_t(i) >= n) {
+    if (i != UNAVAILABLE && (i < 0 || std::size_t(i) >= n)) {
       PCL_ERROR(
           "[pcl::fot::search::FastOctTreeSearch::removePoints] Index %d lies outside the input cloud "
           "(%zu points); nothing removed.\n",
           int(i), n);
       return 0;
     }
+  trackFreeIndices();
   built_ = Source{};
-  return index_.remove(indices.data(), indices.size());
+  std::vector<std::int32_t> removed;
+  const std::size_t count = index_.remove(indices.data(), indices.size(), &removed);
+  freeIndices(removed);
+  return count;
 }
 
 template <typename PointT>
@@ -110,8 +202,12 @@ std::size_t FastOctTreeSearch<PointT>::removeBox(const Eigen::Vector3f& min_pt, 
         caller);
     return 0;
   }
+  trackFreeIndices();
   built_ = Source{};
-  return index_.removeBox(min_pt.data(), max_pt.data(), inside);
+  std::vector<std::int32_t> removed;
+  const std::size_t count = index_.removeBox(min_pt.data(), max_pt.data(), inside, &removed);
+  freeIndices(removed);
+  return count;
 }
 
 template <typename PointT>
