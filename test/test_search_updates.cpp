@@ -470,3 +470,47 @@ TEST(SearchUpdates, RemovedIndicesGoToLaterPointsLowestFirst) {
   EXPECT_EQ((*input)[3].x, 3.0f);
   EXPECT_EQ((*search.getInputCloud())[3].x, 101.0f);
 }
+
+// Box removals walk the cells the box touches (or those it does not hold whole) and read points only on its
+// faces: boxes on cell faces, through points, beyond the key range, and points beyond it too, against
+// brute force.
+TEST(SearchUpdates, BoxRemovalsEqualBruteForceAtTheFacesAndBeyondTheKeys) {
+  const float big = std::numeric_limits<float>::max();
+  const std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> boxes = {
+      {Eigen::Vector3f(-0.5f, -0.5f, -0.5f), Eigen::Vector3f(0.5f, 0.5f, 0.5f)},     // faces on cell faces
+      {Eigen::Vector3f(0.25f, 0.25f, 0.25f), Eigen::Vector3f(0.25f, 0.25f, 0.25f)},  // one point's place
+      {Eigen::Vector3f(-0.3f, -2.0f, 0.1f), Eigen::Vector3f(0.7f, 2.0f, 0.6f)},
+      {Eigen::Vector3f(-big, -big, -big), Eigen::Vector3f(0.0f, big, big)},  // beyond the keys
+      {Eigen::Vector3f(-big, -big, -big), Eigen::Vector3f(big, big, big)},
+      {Eigen::Vector3f(2e7f, -1.0f, -1.0f), Eigen::Vector3f(big, 1.0f, 1.0f)},  // only the far points
+      {Eigen::Vector3f(5.0f, 5.0f, 5.0f), Eigen::Vector3f(6.0f, 6.0f, 6.0f)},   // none
+  };
+  for (const double resolution : {0.25, 0.1}) {
+    for (std::size_t b = 0; b < boxes.size(); ++b) {
+      for (const bool inside : {true, false}) {
+        std::mt19937 rng(static_cast<unsigned>(b));
+        Cloud cloud = latticeBatch(rng, 400);
+        // Far points: the grid centres on the bulk, and the one 4e8 m away lies beyond its keys (an outlier).
+        cloud.push_back(PointXYZ(3e7f, 0.0f, 0.0f));
+        cloud.push_back(PointXYZ(-4e8f, 0.25f, 0.5f));
+        Search search(resolution);
+        pcl::Indices ids;
+        search.addPoints(cloud, ids);
+        const auto& [lo, hi] = boxes[b];
+        std::vector<bool> held(search.getInputCloud()->size(), false);
+        std::size_t expected = 0;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+          if (ids[i] == pcl::UNAVAILABLE) continue;
+          const Eigen::Vector3f p = cloud[i].getVector3fMap();
+          const bool in = (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+          held[std::size_t(ids[i])] = in != inside;
+          expected += in == inside;
+        }
+        ASSERT_EQ(inside ? search.removePoints(lo, hi) : search.removeOutsideBox(lo, hi), expected)
+            << "box " << b << (inside ? " inside" : " outside") << ", cells of " << resolution << " m";
+        ASSERT_EQ(search.size(), heldCount(held));
+        ASSERT_NO_FATAL_FAILURE(expectBruteForce(search, held, rng)) << "box " << b;
+      }
+    }
+  }
+}

@@ -14,40 +14,14 @@
 
 #include "search/cell_size.h"
 #include "search/neighbour_walk.h"
+#include "search/point_policy.h"
 
 namespace pcl {
 namespace fot {
 namespace {
 
-struct Hit {
-  float distance;
-  std::int32_t index;
-  std::uint32_t slot;  // where the point sits in the table
-  bool operator<(const Hit& o) const {
-    return distance < o.distance || (distance == o.distance && index < o.index);
-  }
-};
-
-constexpr float kOrigin[3] = {0.0f, 0.0f, 0.0f};
-
 bool finite3(const float* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-}
-
-/**
- * PCL's distances, to the bit: FLANN's L2_Simple and L1 sum the axes left to right in float; pcl::octree's
- * Eigen squaredNorm() sums x² + (y² + z²).
- */
-inline float pointDistance(Metric metric, const float* p, const float q[3]) {
-  const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-  switch (metric) {
-    case Metric::Euclidean:
-      return dx * dx + dy * dy + dz * dz;
-    case Metric::EuclideanEigen:
-      return dx * dx + (dy * dy + dz * dz);
-    default:
-      return std::fabs(dx) + std::fabs(dy) + std::fabs(dz);
-  }
 }
 
 /** Numbers the occupied cells in Morton order: each bitmap word gets the rank of its first one. */
@@ -60,18 +34,6 @@ std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_
   for (unsigned o = 0; o < 8; ++o)
     next = assignRanks(tree, n.child(tree.words(), o), n.childOffset(o), next, ranks);
   return next;
-}
-
-/**
- * The least distance PCL could report for a point in the box [lo, hi] from q: the gaps, squared and summed
- * in the order of pointDistance, whose float steps are each monotone, so no point in the box comes out below
- * it.
- */
-inline float boxDistance(Metric metric, const float* lo, const float* hi, const float q[3]) {
-  float gap[3];
-  for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - q[a], q[a] - hi[a], 0.0f});
-  if (metric == Metric::Manhattan) return gap[0] + gap[1] + gap[2];
-  return pointDistance(metric, gap, kOrigin);
 }
 
 using Box = std::array<float, 6>;  // low x, y, z, high x, y, z
@@ -108,252 +70,18 @@ constexpr std::uint32_t kNoSlot = ~std::uint32_t(0);
 /** The bucket of the outliers in an updated index: a key no cell has. */
 constexpr Key kOutliers{std::numeric_limits<std::int32_t>::min(), 0, 0};
 
+/**
+ * The key of coordinate c on one axis, as CellGrid::pointToKey computes it, or one past the key range's end
+ * on the side c lies when it is beyond the range: keys grow with coordinates.
+ */
+std::int64_t stretchedKey(const CellGrid& grid, double c, unsigned axis) {
+  const double q = (c - grid.origin()[axis]) / grid.resolution();
+  if (q < double(kMinKey)) return std::int64_t(kMinKey) - 1;
+  if (q >= double(kMaxKey) + 1.0) return std::int64_t(kMaxKey) + 1;
+  return std::int64_t(std::floor(q));
+}
+
 }  // namespace
-
-/** Distances from one query point, in metres, to the points of the cells the walk visits. */
-class PointIndex::Policy {
- public:
-  using Distance = double;
-
-  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into
-   * metres. */
-  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k,
-         double limit, std::vector<Hit>& results)
-      : index_(index),
-        q_{q[0], q[1], q[2]},
-        metric_(metric),
-        k_(k),
-        limit_(limit),
-        bound_(limit),
-        results_(results) {
-    const double res = index.tree_.getGrid().resolution();
-    scale_ = metric != Metric::Manhattan ? res * res : res;
-    const double slack =
-        0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / res;
-    for (int a = 0; a < 3; ++a) low_[a] = qc[a] - slack, high_[a] = qc[a] + slack;
-  }
-
-  // Bounds are shaded down a little. Gaps in cells are measured from the query widened by a few ulps of its
-  // cell coordinates, as much as its cell and a point's may be off by in rounding (a point exactly at the
-  // query may lie in the next cell), and by 1e-22 m, below which float squares lose their precision among
-  // denormals. Then a float distance may come out up to a few ulps below the exact one.
-  void childGaps(const TreeCoord& lo, unsigned child_level, Distance gap[3][2]) const {
-    const double half = double(std::uint64_t(1) << child_level);
-    for (int a = 0; a < 3; ++a) {
-      const double low = double(tree_coord::toKey(lo[a])), mid = low + half, high = mid + half;
-      const double below = std::max({low - high_[a], low_[a] - mid, 0.0}),
-                   above = std::max({mid - high_[a], low_[a] - high, 0.0});
-      gap[a][0] = shade((metric_ != Metric::Manhattan ? below * below : below) * scale_);
-      gap[a][1] = shade((metric_ != Metric::Manhattan ? above * above : above) * scale_);
-    }
-  }
-
-  Distance exterior(const TreeCoord& lo, unsigned level) const {
-    const double side = double(std::uint64_t(1) << level);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a) {
-      const double box_lo = double(tree_coord::toKey(lo[a]));
-      nearest = std::min({nearest, low_[a] - box_lo, box_lo + side - high_[a]});
-    }
-    nearest = std::max(nearest, 0.0);
-    return shade((metric_ != Metric::Manhattan ? nearest * nearest : nearest) * scale_);
-  }
-
-  bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
-  /** The box of the node's points bounds them tighter than the node's cube: queries far away prune more. */
-  bool mayImprove(Distance, const TreeCoord&, unsigned, std::size_t word) const {
-    if (word == detail::kNoWord || index_.word_box_.empty()) return true;
-    const float* box = index_.word_box_[word].data();
-    const float d = pcl::fot::boxDistance(metric_, box, box + 3, q_);
-    return !(double(d) > bound_);
-  }
-  bool settled(const TreeCoord& lo, unsigned level) const { return bound_ < exterior(lo, level); }
-  bool wholeRegions() const { return false; }
-  void visitRegion(const TreeCoord&, unsigned, std::uint64_t) {}
-
-  /**
-   * A cell's points, or the outliers' (the run after the last cell). A crowded run is split into boxes (see
-   * build), visited nearer first and skipped when beyond the bound.
-   */
-  void visitCell(const TreeCoord& cell, std::uint64_t rank) {
-    if (index_.updatable_) {
-      visitBucket(Key{tree_coord::toKey(cell[0]), tree_coord::toKey(cell[1]), tree_coord::toKey(cell[2])});
-      return;
-    }
-    const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
-    if (metric_ == Metric::Euclidean)
-      scanRun<Metric::Euclidean>(rank, begin, end);
-    else if (metric_ == Metric::EuclideanEigen)
-      scanRun<Metric::EuclideanEigen>(rank, begin, end);
-    else
-      scanRun<Metric::Manhattan>(rank, begin, end);
-  }
-
-  /** The points of a cell (or the outliers) in an updated index. */
-  void visitBucket(const Key& cell) {
-    std::uint32_t n;
-    const detail::BucketPoint* points = index_.buckets_.find(cell, n);
-    if (metric_ == Metric::Euclidean)
-      scanBucket<Metric::Euclidean>(points, n);
-    else if (metric_ == Metric::EuclideanEigen)
-      scanBucket<Metric::EuclideanEigen>(points, n);
-    else
-      scanBucket<Metric::Manhattan>(points, n);
-  }
-
-  /** Runs with more points than this are split into boxes. */
-  static constexpr std::uint32_t kCrowded = 64;
-  /** The most points a box of a crowded run holds unsplit. */
-  static constexpr std::uint32_t kCrowdLeaf = 16;
-  /** k for every point within the bound. */
-  static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
-  /**
-   * Beyond this k, insertion in order, O(k) a point, costs more than a heap's O(log k) and a sort at the end:
-   * callgrind put the crossover at k = 70 to 80 on a Kinect frame and a room scan.
-   */
-  static constexpr std::size_t kLargeK = 80;
-
-  void offer(const float* p, std::int32_t index, std::uint32_t slot) {
-    const Hit h{pointDistance(metric_, p, q_), index, slot};
-    if (double(h.distance) <= bound_) keep(h);
-  }
-
- private:
-  template <Metric M>
-  void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
-    const float* xyz = index_.xyz_.data();
-    if (end - begin <= kCrowded) {
-      // The points' own box bounds them tighter than the cell's.
-      const float* box = index_.run_box_[rank].data();
-      if (double(boxDistance<M>(box, box + 3)) > bound_) return;
-      for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
-      return;
-    }
-    const auto& roots = index_.crowd_root_;
-    const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
-    scanBoxes<M>(root->second);
-  }
-
-  /** A bucket's points; each one's slot is its index. */
-  template <Metric M>
-  void scanBucket(const detail::BucketPoint* points, std::uint32_t n) {
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const float d = pointDistance(M, points[i].p, q_);
-      if (double(d) <= bound_) keep(Hit{d, points[i].index, std::uint32_t(points[i].index)});
-    }
-  }
-
-  /** A crowded run's boxes, depth first, the nearer half first; a box is skipped once beyond the bound. */
-  template <Metric M>
-  void scanBoxes(std::uint32_t node) {
-    const float* xyz = index_.xyz_.data();
-    const CrowdNode* nodes = index_.crowd_.data();
-    std::uint32_t pending[64];  // one per level at most: the farther halves, with their distances
-    float pending_distance[64];
-    int top = 0;
-    for (;;) {
-      const CrowdNode& box = nodes[node];
-      if (box.right == 0) {
-        for (std::uint32_t i = box.begin; i < box.end; ++i) consider<M>(xyz, i);
-      } else {
-        std::uint32_t nearer = node + 1, farther = box.right;
-        float near_d = boxDistance<M>(nodes[nearer]), far_d = boxDistance<M>(nodes[farther]);
-        if (far_d < near_d) std::swap(nearer, farther), std::swap(near_d, far_d);
-        if (mayHold(far_d, nodes[farther])) pending[top] = farther, pending_distance[top++] = far_d;
-        if (mayHold(near_d, nodes[nearer])) {
-          node = nearer;
-          continue;
-        }
-      }
-      while (top > 0 && !mayHold(pending_distance[top - 1], nodes[pending[top - 1]])) --top;
-      if (top == 0) return;
-      node = pending[--top];
-    }
-  }
-
-  /**
-   * A box at `distance` may hold a point the results take. Once k are kept, one at the k-th's distance must
-   * have a smaller index, so a pile of equal points (sensors that write (0, 0, 0) for no return) is not
-   * scanned whole: its halves split by index.
-   */
-  bool mayHold(float distance, const CrowdNode& box) const {
-    if (double(distance) != bound_) return double(distance) < bound_;
-    return results_.size() < k_ || box.least_index < worst().index;
-  }
-
-  /** The k-th best kept, once there are k. */
-  const Hit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
-
-  /**
-   * The least distance PCL could report from this query for a point in the box (see the free boxDistance).
-   */
-  template <Metric M>
-  float boxDistance(const CrowdNode& box) const {
-    return boxDistance<M>(box.lo, box.hi);
-  }
-  template <Metric M>
-  float boxDistance(const float* lo, const float* hi) const {
-    return pcl::fot::boxDistance(M, lo, hi, q_);
-  }
-
-  /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
-  template <Metric M>
-  void consider(const float* xyz, std::uint32_t i) {
-    const float d = pointDistance(M, &xyz[3 * std::size_t(i)], q_);
-    if (double(d) <= bound_) keep(Hit{d, index_.index_[i], i});
-  }
-
-  /**
-   * A point within the bound joins the results. Up to kLargeK, the k best are kept sorted, as FLANN keeps
-   * them: the walk finds points roughly nearest first, so a new one mostly goes near the end. A larger k
-   * keeps them in a heap, sorted at the end, and so do radius searches without max_nn, which keep every
-   * point.
-   */
-  void keep(const Hit& h) {
-    if (k_ == kAll) {
-      results_.push_back(h);
-      return;
-    }
-    if (k_ > kLargeK) {
-      keepInHeap(h);
-      return;
-    }
-    if (results_.size() == k_) {
-      if (!(h < results_.back())) return;
-      results_.pop_back();
-    }
-    std::size_t i = results_.size();
-    results_.push_back(h);
-    for (; i > 0 && h < results_[i - 1]; --i) results_[i] = results_[i - 1];
-    results_[i] = h;
-    if (results_.size() == k_) bound_ = std::min(limit_, double(results_.back().distance));
-  }
-
-  /** The k best in a max-heap: the k-th best on top. */
-  void keepInHeap(const Hit& h) {
-    if (results_.size() == k_) {
-      if (!(h < results_.front())) return;
-      std::pop_heap(results_.begin(), results_.end());
-      results_.back() = h;
-    } else {
-      results_.push_back(h);
-    }
-    std::push_heap(results_.begin(), results_.end());
-    if (results_.size() == k_) bound_ = std::min(limit_, double(results_.front().distance));
-  }
-
-  static double shade(double d) { return d * (1.0 - 4e-6); }
-
-  const PointIndex& index_;
-  float q_[3];
-  double low_[3], high_[3];  // the query in cells from the grid origin, widened by its rounding
-  double scale_;             // cell units to the metric's units
-  Metric metric_;
-  std::size_t k_;
-  double limit_;
-  double bound_;  // what a point must not exceed: the k-th best so far, else the limit
-  std::vector<Hit>& results_;
-};
 
 PointIndex::PointIndex() : automatic_(true), resolution_(0.01), tree_(resolution_) {}
 
@@ -613,12 +341,56 @@ std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count,
 std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool inside,
                                   std::vector<std::int32_t>* removed) {
   makeUpdatable(0);
+  // Keys grow with coordinates, so a cell whose key lies strictly between the keys of lo and hi on every
+  // axis holds only points inside the box, and one beyond them on some axis only points outside it: only
+  // the cells on the box's faces are read point by point, and the walk skips the subtrees it keeps whole.
+  // A removal costs the cells it removes and those on the faces, not every point held.
+  const CellGrid& grid = tree_.getGrid();
+  std::int64_t klo[3], khi[3];
+  for (unsigned a = 0; a < 3; ++a) {
+    klo[a] = stretchedKey(grid, lo[a], a);
+    khi[a] = stretchedKey(grid, hi[a], a);
+  }
   std::vector<std::int32_t> doomed;
-  buckets_.forEachPoint([&](const detail::BucketPoint& p) {
-    const bool in = p.p[0] >= lo[0] && p.p[0] <= hi[0] && p.p[1] >= lo[1] && p.p[1] <= hi[1] &&
-                    p.p[2] >= lo[2] && p.p[2] <= hi[2];
-    if (in == inside) doomed.push_back(p.index);
-  });
+  const auto take = [&](const Key& cell) {
+    std::uint32_t count = 0;
+    const detail::BucketPoint* points = buckets_.find(cell, count);
+    if (count == 0) return;
+    const std::int64_t k[3] = {cell.x, cell.y, cell.z};
+    bool within = false, beyond = false;  // the outliers have no cell: each point is read
+    if (cell != kOutliers) {
+      within = true;
+      for (unsigned a = 0; a < 3; ++a) {
+        within = within && k[a] > klo[a] && k[a] < khi[a];
+        beyond = beyond || k[a] < klo[a] || k[a] > khi[a];
+      }
+    }
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const float* p = points[i].p;
+      const bool in = within || (!beyond && p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] &&
+                                 p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2]);
+      if (in == inside) doomed.push_back(points[i].index);
+    }
+  };
+  const auto takeRegion = [&](const Region& r) {
+    const std::int32_t side = std::int32_t(1) << r.level;
+    for (std::int32_t x = 0; x < side; ++x)
+      for (std::int32_t y = 0; y < side; ++y)
+        for (std::int32_t z = 0; z < side; ++z) take(Key{r.min_key.x + x, r.min_key.y + y, r.min_key.z + z});
+  };
+  // The stretched keys, one past the range at most, fit a Key.
+  const Key box_lo{std::int32_t(klo[0]), std::int32_t(klo[1]), std::int32_t(klo[2])};
+  const Key box_hi{std::int32_t(khi[0]), std::int32_t(khi[1]), std::int32_t(khi[2])};
+  const auto occupied = [&](const Region& r) {
+    if (r.state == CellState::Occupied) takeRegion(r);
+  };
+  if (inside) {
+    tree_.forEachRegionInBox(box_lo, box_hi, occupied);  // the cells the box touches
+  } else {  // all but the cells strictly between the keys of lo and hi
+    tree_.forEachRegionOutsideBox(Key{box_lo.x + 1, box_lo.y + 1, box_lo.z + 1},
+                                  Key{box_hi.x - 1, box_hi.y - 1, box_hi.z - 1}, occupied);
+  }
+  take(kOutliers);
   return remove(doomed.data(), doomed.size(), removed);
 }
 
@@ -791,7 +563,7 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
     cell[a] = std::int32_t(std::clamp(std::floor(qc[a]), double(kMinKey), double(kMaxKey)));
   }
   const Key key{cell[0], cell[1], cell[2]};
-  thread_local std::vector<Hit> results;
+  thread_local std::vector<detail::PointHit> results;
   thread_local std::uint32_t last_slot = kNoSlot;  // this thread's previous nearest point on this build
   if (accessor_fresh) last_slot = kNoSlot;
   results.clear();
@@ -820,7 +592,7 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   if (k == 1 && !results.empty()) last_slot = results.front().slot;
   indices.reserve(results.size());
   distances.reserve(results.size());
-  for (const Hit& h : results) {
+  for (const detail::PointHit& h : results) {
     indices.push_back(h.index);
     distances.push_back(h.distance);
   }

@@ -146,6 +146,9 @@ class FastOctTree {
   /** As forEachRegion, but only the regions that overlap the key box [lo, hi] (inclusive), whole. */
   template <typename Visitor>
   void forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& visit) const;
+  /** As forEachRegion, but only the regions that reach outside the key box [lo, hi] (inclusive), whole. */
+  template <typename Visitor>
+  void forEachRegionOutsideBox(const Key& lo, const Key& hi, Visitor&& visit) const;
   /** Visits every cell holding `state` (other than Unknown) in Morton order: visit(const Key&). */
   template <typename Visitor>
   void forEachCell(CellState state, Visitor&& visit) const;
@@ -403,6 +406,16 @@ void FastOctTree::forEachRegionInBox(const Key& lo, const Key& hi, Visitor&& vis
            c.z + side > lo.z;
   };
   walkRegions(root(), overlaps, visit);
+}
+
+template <typename Visitor>
+void FastOctTree::forEachRegionOutsideBox(const Key& lo, const Key& hi, Visitor&& visit) const {
+  auto reaches_out = [&](const Key& c, unsigned level) {
+    const std::int64_t last = (std::int64_t(1) << level) - 1;
+    return c.x < lo.x || c.x + last > hi.x || c.y < lo.y || c.y + last > hi.y || c.z < lo.z ||
+           c.z + last > hi.z;
+  };
+  walkRegions(root(), reaches_out, visit);
 }
 
 template <typename Visitor>
