@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the built library into a scratch prefix and builds and runs a C++-only consumer project against
 # it with find_package(pcl_fot): the basic use, and the templates with a custom point type, mixed types and
-# double. (Each header compiles on its own: the Header.* tests check that once.) Expects build/ from
+# double. (Each header compiles on its own: the suite's build checks that once.) Expects build/ from
 # scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
