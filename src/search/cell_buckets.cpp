@@ -1,6 +1,7 @@
 #include <pcl_fot/search/cell_buckets.h>
 
 #include <algorithm>
+#include <limits>
 
 namespace pcl {
 namespace fot {
@@ -9,8 +10,10 @@ namespace detail {
 void CellBuckets::clear() {
   slots_.clear();
   buckets_.clear();
-  cell_of_.clear();
+  boxes_.clear();
+  info_.clear();
   spare_.clear();
+  changed_.clear();
   where_.clear();
   size_ = 0;
 }
@@ -58,16 +61,20 @@ bool CellBuckets::add(const Key& cell, const float p[3], std::int32_t index) {
     } else {
       b = std::uint32_t(buckets_.size());
       buckets_.emplace_back();
-      cell_of_.emplace_back();
+      boxes_.emplace_back();
+      info_.emplace_back();
     }
-    cell_of_[b] = cell;
+    info_[b].cell = cell;
     slots_[i] = Slot{cell, b};
   }
-  std::vector<BucketPoint>& bucket = buckets_[slots_[i].bucket];
+  const std::uint32_t b = slots_[i].bucket;
+  std::vector<BucketPoint>& bucket = buckets_[b];
   if (std::size_t(index) >= where_.size()) where_.resize(std::size_t(index) + 1, kNowhere);
-  where_[std::size_t(index)] = std::uint64_t(slots_[i].bucket) << 32 | std::uint32_t(bucket.size());
+  where_[std::size_t(index)] = std::uint64_t(b) << 32 | std::uint32_t(bucket.size());
   bucket.push_back(BucketPoint{{p[0], p[1], p[2]}, index});
+  ++info_[b].live;
   ++size_;
+  markChanged(b);
   return fresh;
 }
 
@@ -76,46 +83,99 @@ bool CellBuckets::remove(std::int32_t index, Key& cell, bool& emptied) {
   const std::uint64_t w = where_[std::size_t(index)];
   const std::uint32_t b = std::uint32_t(w >> 32), at = std::uint32_t(w);
   std::vector<BucketPoint>& bucket = buckets_[b];
-  bucket[at] = bucket.back();
-  where_[std::size_t(bucket[at].index)] = std::uint64_t(b) << 32 | at;
-  bucket.pop_back();
+  Info& info = info_[b];
+  if (at >= info.boxed) {  // in the tail: the last point takes its place
+    bucket[at] = bucket.back();
+    where_[std::size_t(bucket[at].index)] = std::uint64_t(b) << 32 | at;
+    bucket.pop_back();
+  } else {  // in a box: a hole, which keeps the boxes right
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    bucket[at] = BucketPoint{{nan, nan, nan}, -1};
+    ++info.holes;
+  }
   where_[std::size_t(index)] = kNowhere;
   --size_;
-  cell = cell_of_[b];
-  emptied = bucket.empty();
+  --info.live;
+  cell = info.cell;
+  emptied = info.live == 0;
+  markChanged(b);
   if (emptied) {
     erase(probe(cell));
     spare_.push_back(b);
     // A spare bucket keeps a few points' storage for the next cell, no more; the table halves once an
     // eighth of it is used (it doubles at a half), so memory follows the cells held.
+    bucket.clear();
     if (bucket.capacity() > kKeptCapacity) std::vector<BucketPoint>().swap(bucket);
+    std::vector<PointBox>().swap(boxes_[b]);
+    info.holes = info.boxed = 0;
     if (slots_.size() > 16 && 8 * cells() < slots_.size()) rehash(slots_.size() / 2);
-  } else if (bucket.capacity() > kKeptCapacity && 4 * bucket.size() < bucket.capacity()) {
-    // A bucket thinned out to a quarter: half its storage goes, O(1) a point in the long run. The points
-    // keep their positions, so where_ holds.
+  }
+  return true;
+}
+
+void CellBuckets::markChanged(std::uint32_t b) {
+  if (info_[b].changed) return;
+  info_[b].changed = true;
+  changed_.push_back(b);
+}
+
+void CellBuckets::settle() {
+  for (const std::uint32_t b : changed_) {
+    Info& info = info_[b];
+    info.changed = false;
+    const std::size_t n = buckets_[b].size();
+    // Split again once the tail and the holes reach half the points: each split of m points follows at
+    // least m / 2 changes. A bucket no longer crowded loses its boxes and holes.
+    const std::size_t stale = (n - info.boxed) + info.holes;
+    const bool crowded = info.live > kCrowded;
+    if (crowded ? (info.boxed == 0 || 2 * stale >= info.live) : info.boxed > 0) rebox(b);
+  }
+  changed_.clear();
+}
+
+void CellBuckets::rebox(std::uint32_t b) {
+  std::vector<BucketPoint>& bucket = buckets_[b];
+  std::vector<PointBox>& boxes = boxes_[b];
+  Info& info = info_[b];
+  bucket.erase(std::remove_if(bucket.begin(), bucket.end(), [](const BucketPoint& p) { return p.index < 0; }),
+               bucket.end());
+  boxes.clear();
+  if (bucket.size() > kCrowded)
+    splitIntoBoxes(bucket.data(), std::uint32_t(bucket.size()), 0, boxes);
+  else
+    std::vector<PointBox>().swap(boxes);
+  info.holes = 0;
+  info.boxed = std::uint32_t(boxes.empty() ? 0 : bucket.size());
+  // A bucket thinned out to a quarter gives back half its storage, O(1) a point in the long run.
+  if (bucket.capacity() > kKeptCapacity && 4 * bucket.size() < bucket.capacity()) {
     std::vector<BucketPoint> smaller;
     smaller.reserve(std::max(kKeptCapacity, 2 * bucket.size()));
     smaller.assign(bucket.begin(), bucket.end());
     bucket.swap(smaller);
   }
-  return true;
+  for (std::uint32_t at = 0; at < bucket.size(); ++at)
+    where_[std::size_t(bucket[at].index)] = std::uint64_t(b) << 32 | at;
 }
 
-const BucketPoint* CellBuckets::find(const Key& cell, std::uint32_t& count) const {
+const BucketPoint* CellBuckets::find(const Key& cell, std::uint32_t& count, const PointBox*& boxes) const {
   count = 0;
+  boxes = nullptr;
   if (slots_.empty()) return nullptr;
   const Slot& s = slots_[probe(cell)];
   if (s.bucket == kFree) return nullptr;
   const std::vector<BucketPoint>& bucket = buckets_[s.bucket];
   count = std::uint32_t(bucket.size());
+  if (!boxes_[s.bucket].empty()) boxes = boxes_[s.bucket].data();
   return bucket.data();
 }
 
 std::size_t CellBuckets::memoryBytes() const {
   std::size_t bytes = slots_.capacity() * sizeof(Slot) + buckets_.capacity() * sizeof(buckets_[0]) +
-                      cell_of_.capacity() * sizeof(Key) + spare_.capacity() * sizeof(std::uint32_t) +
+                      boxes_.capacity() * sizeof(boxes_[0]) + info_.capacity() * sizeof(Info) +
+                      (spare_.capacity() + changed_.capacity()) * sizeof(std::uint32_t) +
                       where_.capacity() * sizeof(std::uint64_t);
   for (const auto& b : buckets_) bytes += b.capacity() * sizeof(BucketPoint);
+  for (const auto& b : boxes_) bytes += b.capacity() * sizeof(PointBox);
   return bytes;
 }
 

@@ -183,6 +183,7 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
 }
 
 void PointIndex::changed() {
+  buckets_.settle();
   build_id_ = next_build_id++;
 }
 
@@ -199,6 +200,7 @@ void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber
     fill(cell, start_[rank], start_[rank + 1]);
   });
   if (!start_.empty()) fill(kOutliers, start_[start_.size() - 2], start_.back());
+  buckets_.settle();
   updatable_ = true;
   any_ = index_.empty() ? -1 : renumber ? renumber[index_.front()] : index_.front() + offset;
   std::vector<std::uint64_t>().swap(ranks_);
@@ -207,7 +209,7 @@ void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber
   std::vector<std::int32_t>().swap(index_);
   std::vector<std::array<float, 6>>().swap(run_box_);
   std::vector<std::array<float, 6>>().swap(word_box_);
-  std::vector<CrowdNode>().swap(crowd_);
+  std::vector<detail::PointBox>().swap(crowd_);
   crowd_root_.clear();
   crowd_root_.shrink_to_fit();
 }
@@ -354,7 +356,8 @@ std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool ins
   std::vector<std::int32_t> doomed;
   const auto take = [&](const Key& cell) {
     std::uint32_t count = 0;
-    const detail::BucketPoint* points = buckets_.find(cell, count);
+    const detail::PointBox* boxes;
+    const detail::BucketPoint* points = buckets_.find(cell, count, boxes);
     if (count == 0) return;
     const std::int64_t k[3] = {cell.x, cell.y, cell.z};
     bool within = false, beyond = false;  // the outliers have no cell: each point is read
@@ -366,6 +369,7 @@ std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool ins
       }
     }
     for (std::uint32_t i = 0; i < count; ++i) {
+      if (points[i].index < 0) continue;  // a hole
       const float* p = points[i].p;
       const bool in = within || (!beyond && p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] &&
                                  p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2]);
@@ -485,53 +489,23 @@ void PointIndex::boxRuns(std::uint64_t cells) {
 }
 
 void PointIndex::splitCrowdedRuns(std::uint64_t cells) {
-  // Crowded runs are split into boxes at the median of their longest side, for Policy::scanBoxes.
   crowd_.clear();
   crowd_root_.clear();
-  std::vector<Slot> run;
+  std::vector<detail::BucketPoint> run;
   for (std::size_t c = 0; c <= cells; ++c) {
     const std::uint32_t begin = start_[c], end = start_[c + 1];
-    if (end - begin <= Policy::kCrowded) continue;
+    if (end - begin <= detail::kCrowded) continue;
     run.resize(end - begin);
     for (std::uint32_t i = begin; i < end; ++i)
       run[i - begin] = {
           {xyz_[3 * std::size_t(i)], xyz_[3 * std::size_t(i) + 1], xyz_[3 * std::size_t(i) + 2]}, index_[i]};
     crowd_root_.emplace_back(std::uint32_t(c), std::uint32_t(crowd_.size()));
-    splitBox(run, begin, 0, end - begin);
+    detail::splitIntoBoxes(run.data(), end - begin, begin, crowd_);
     for (std::uint32_t i = begin; i < end; ++i) {
       std::copy(run[i - begin].p, run[i - begin].p + 3, &xyz_[3 * std::size_t(i)]);
       index_[i] = run[i - begin].index;
     }
   }
-}
-
-void PointIndex::splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin,
-                          std::uint32_t end) {
-  const std::size_t node = crowd_.size();
-  CrowdNode box{{run[begin].p[0], run[begin].p[1], run[begin].p[2]},
-                {run[begin].p[0], run[begin].p[1], run[begin].p[2]},
-                first + begin,
-                first + end,
-                0,
-                run[begin].index};
-  for (std::uint32_t i = begin + 1; i < end; ++i) {
-    for (int a = 0; a < 3; ++a)
-      box.lo[a] = std::min(box.lo[a], run[i].p[a]), box.hi[a] = std::max(box.hi[a], run[i].p[a]);
-    box.least_index = std::min(box.least_index, run[i].index);
-  }
-  crowd_.push_back(box);
-  if (end - begin <= Policy::kCrowdLeaf) return;
-  int axis = 0;
-  for (int a = 1; a < 3; ++a)
-    if (box.hi[a] - box.lo[a] > box.hi[axis] - box.lo[axis]) axis = a;
-  const std::uint32_t mid = begin + (end - begin) / 2;
-  std::nth_element(run.begin() + begin, run.begin() + mid, run.begin() + end,
-                   [axis](const Slot& u, const Slot& v) {
-                     return u.p[axis] < v.p[axis] || (u.p[axis] == v.p[axis] && u.index < v.index);
-                   });
-  splitBox(run, first, begin, mid);
-  crowd_[node].right = std::uint32_t(crowd_.size());
-  splitBox(run, first, mid, end);
 }
 
 std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Metric metric,
@@ -576,7 +550,9 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
       const detail::BucketPoint& p = buckets_.point(std::int32_t(last_slot));
       policy.offer(p.p, p.index, last_slot);
     }
-    if (tree_.getOccupiedCount() > 0)
+    // Most queries fall among the points: their own cell, found by its key, often holds the whole answer,
+    // and then the walk is not needed. The cell's box proves it (Policy::settled).
+    if (!policy.visitOwnCell(key) && tree_.getOccupiedCount() > 0)
       detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, nullptr, policy).run(*accessor, key);
     policy.visitBucket(kOutliers);
   } else {
@@ -621,7 +597,7 @@ std::size_t PointIndex::getMemoryBytes() const {
          start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
          index_.capacity() * sizeof(std::int32_t) +
          (run_box_.capacity() + word_box_.capacity()) * sizeof(run_box_[0]) +
-         crowd_.capacity() * sizeof(CrowdNode) + crowd_root_.capacity() * sizeof(crowd_root_[0]) +
+         crowd_.capacity() * sizeof(detail::PointBox) + crowd_root_.capacity() * sizeof(crowd_root_[0]) +
          buckets_.memoryBytes();
 }
 

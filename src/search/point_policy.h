@@ -125,7 +125,8 @@ class PointIndex::Policy {
    */
   void visitCell(const TreeCoord& cell, std::uint64_t rank) {
     if (index_.updatable_) {
-      visitBucket(Key{tree_coord::toKey(cell[0]), tree_coord::toKey(cell[1]), tree_coord::toKey(cell[2])});
+      const Key key{tree_coord::toKey(cell[0]), tree_coord::toKey(cell[1]), tree_coord::toKey(cell[2])};
+      if (!(visited_first_ && key == first_)) visitBucket(key);
       return;
     }
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
@@ -137,22 +138,30 @@ class PointIndex::Policy {
       scanRun<Metric::Manhattan>(rank, begin, end);
   }
 
+  /**
+   * The query's own cell in an updated index, before any walk: found by its key, and left out of the walk
+   * that may follow. Returns true if the answer is then complete: nothing outside the cell can improve it.
+   */
+  bool visitOwnCell(const Key& cell) {
+    visitBucket(cell);
+    visited_first_ = true;
+    first_ = cell;
+    return settled(TreeCoord(cell), 0);
+  }
+
   /** The points of a cell (or the outliers) in an updated index. */
   void visitBucket(const Key& cell) {
     std::uint32_t n;
-    const detail::BucketPoint* points = index_.buckets_.find(cell, n);
+    const detail::PointBox* boxes;
+    const detail::BucketPoint* points = index_.buckets_.find(cell, n, boxes);
     if (metric_ == Metric::Euclidean)
-      scanBucket<Metric::Euclidean>(points, n);
+      scanBucket<Metric::Euclidean>(points, n, boxes);
     else if (metric_ == Metric::EuclideanEigen)
-      scanBucket<Metric::EuclideanEigen>(points, n);
+      scanBucket<Metric::EuclideanEigen>(points, n, boxes);
     else
-      scanBucket<Metric::Manhattan>(points, n);
+      scanBucket<Metric::Manhattan>(points, n, boxes);
   }
 
-  /** Runs with more points than this are split into boxes. */
-  static constexpr std::uint32_t kCrowded = 64;
-  /** The most points a box of a crowded run holds unsplit. */
-  static constexpr std::uint32_t kCrowdLeaf = 16;
   /** k for every point within the bound. */
   static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
   /**
@@ -170,7 +179,7 @@ class PointIndex::Policy {
   template <Metric M>
   void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
     const float* xyz = index_.xyz_.data();
-    if (end - begin <= kCrowded) {
+    if (end - begin <= detail::kCrowded) {
       // The points' own box bounds them tighter than the cell's.
       const float* box = index_.run_box_[rank].data();
       if (double(boxDistance<M>(box, box + 3)) > bound_) return;
@@ -179,30 +188,44 @@ class PointIndex::Policy {
     }
     const auto& roots = index_.crowd_root_;
     const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
-    scanBoxes<M>(root->second);
+    scanBoxes<M>(index_.crowd_.data(), root->second, [&](std::uint32_t first, std::uint32_t last) {
+      for (std::uint32_t i = first; i < last; ++i) consider<M>(xyz, i);
+    });
   }
 
-  /** A bucket's points; each one's slot is its index. */
+  /**
+   * A bucket's points, through its boxes if it is crowded, then the tail added since; each point's slot is
+   * its index. Holes have NaN coordinates, which no bound takes.
+   */
   template <Metric M>
-  void scanBucket(const detail::BucketPoint* points, std::uint32_t n) {
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const float d = detail::pointDistance(M, points[i].p, q_);
-      if (double(d) <= bound_) keep(detail::PointHit{d, points[i].index, std::uint32_t(points[i].index)});
+  void scanBucket(const detail::BucketPoint* points, std::uint32_t n, const detail::PointBox* boxes) {
+    const auto scan = [&](std::uint32_t first, std::uint32_t last) {
+      for (std::uint32_t i = first; i < last; ++i) {
+        const float d = detail::pointDistance(M, points[i].p, q_);
+        if (double(d) <= bound_) keep(detail::PointHit{d, points[i].index, std::uint32_t(points[i].index)});
+      }
+    };
+    std::uint32_t tail = 0;  // the points after the boxed ones
+    if (boxes) {
+      scanBoxes<M>(boxes, 0, scan);
+      tail = boxes[0].end;
     }
+    scan(tail, n);
   }
 
-  /** A crowded run's boxes, depth first, the nearer half first; a box is skipped once beyond the bound. */
-  template <Metric M>
-  void scanBoxes(std::uint32_t node) {
-    const float* xyz = index_.xyz_.data();
-    const CrowdNode* nodes = index_.crowd_.data();
+  /**
+   * A crowded cell's boxes from `node`, depth first, the nearer half first; a box is skipped once beyond the
+   * bound. scan(begin, end) reads a leaf's points.
+   */
+  template <Metric M, typename Scan>
+  void scanBoxes(const detail::PointBox* nodes, std::uint32_t node, Scan&& scan) {
     std::uint32_t pending[64];  // one per level at most: the farther halves, with their distances
     float pending_distance[64];
     int top = 0;
     for (;;) {
-      const CrowdNode& box = nodes[node];
+      const detail::PointBox& box = nodes[node];
       if (box.right == 0) {
-        for (std::uint32_t i = box.begin; i < box.end; ++i) consider<M>(xyz, i);
+        scan(box.begin, box.end);
       } else {
         std::uint32_t nearer = node + 1, farther = box.right;
         float near_d = boxDistance<M>(nodes[nearer]), far_d = boxDistance<M>(nodes[farther]);
@@ -224,7 +247,7 @@ class PointIndex::Policy {
    * have a smaller index, so a pile of equal points (sensors that write (0, 0, 0) for no return) is not
    * scanned whole: its halves split by index.
    */
-  bool mayHold(float distance, const CrowdNode& box) const {
+  bool mayHold(float distance, const detail::PointBox& box) const {
     if (double(distance) != bound_) return double(distance) < bound_;
     return results_.size() < k_ || box.least_index < worst().index;
   }
@@ -236,7 +259,7 @@ class PointIndex::Policy {
    * The least distance PCL could report from this query for a point in the box (see the free boxDistance).
    */
   template <Metric M>
-  float boxDistance(const CrowdNode& box) const {
+  float boxDistance(const detail::PointBox& box) const {
     return boxDistance<M>(box.lo, box.hi);
   }
   template <Metric M>
@@ -301,6 +324,8 @@ class PointIndex::Policy {
   double limit_;
   double bound_;  // what a point must not exceed: the k-th best so far, else the limit
   std::vector<detail::PointHit>& results_;
+  bool visited_first_ = false;  // visitOwnCell() read the cell first_
+  Key first_;
 };
 
 }  // namespace fot

@@ -4,22 +4,23 @@
 #include <cstdint>
 #include <vector>
 
+#include <pcl_fot/search/point_boxes.h>
 #include <pcl_fot/tree/key.h>
 
 namespace pcl {
 namespace fot {
 namespace detail {
 
-/** A point in a bucket: its coordinates and its index as the user numbers it. */
-struct BucketPoint {
-  float p[3];
-  std::int32_t index;
-};
-
 /**
  * The updatable half of a PointIndex: each cell's points in a bucket of their own, found by the cell's key
  * in an open-addressing table, and each point's place found by its index. Adding or removing a point moves
  * no other point but the last of its bucket, so updates cost O(1) whatever the index holds.
+ *
+ * A crowded bucket's points are split into boxes (see PointBox), so that a search reads a few of them. The
+ * boxes cover the bucket's first points; points added later form a tail that searches scan whole, and a
+ * boxed point removed leaves a hole (NaN coordinates, which no search bound takes). settle(), at the end of
+ * each batch of updates, splits a crowded bucket again once its tail and holes reach half its points: O(log
+ * n) a change in the long run. No query may run between an update and settle().
  *
  * Memory follows the points held, not those ever added: a bucket that empties gives back its storage (but
  * for a few points' worth, kept for the next cell), one that thins out to a quarter shrinks, and the table
@@ -37,6 +38,10 @@ class CellBuckets {
    * the cell now holds none.
    */
   bool remove(std::int32_t index, Key& cell, bool& emptied);
+  /** Splits again the crowded buckets changed since the last call whose boxes cover too few of their points.
+   */
+  void settle();
+
   bool contains(std::int32_t index) const {
     return index >= 0 && std::size_t(index) < where_.size() && where_[std::size_t(index)] != kNowhere;
   }
@@ -45,15 +50,20 @@ class CellBuckets {
     const std::uint64_t w = where_[std::size_t(index)];
     return buckets_[std::size_t(w >> 32)][std::uint32_t(w)];
   }
-  /** The points of `cell`: none if it holds none. */
-  const BucketPoint* find(const Key& cell, std::uint32_t& count) const;
+  /**
+   * The points of `cell`, holes included (index -1): none if it holds none. A crowded cell's boxes, in
+   * pre-order, go to `boxes` (positions in the points returned; those past the last box are not in any),
+   * else nullptr.
+   */
+  const BucketPoint* find(const Key& cell, std::uint32_t& count, const PointBox*& boxes) const;
   std::size_t size() const { return size_; }
   /** Calls visit(point) for every point held. */
   template <typename Visit>
   void forEachPoint(Visit&& visit) const {
     for (const Slot& s : slots_)
       if (s.bucket != kFree)
-        for (const BucketPoint& p : buckets_[s.bucket]) visit(p);
+        for (const BucketPoint& p : buckets_[s.bucket])
+          if (p.index >= 0) visit(p);
   }
   std::size_t memoryBytes() const;
 
@@ -64,6 +74,14 @@ class CellBuckets {
   struct Slot {
     Key cell;
     std::uint32_t bucket = kFree;
+  };
+  /** A bucket's cell and counts. */
+  struct Info {
+    Key cell;
+    std::uint32_t live = 0;   // points held
+    std::uint32_t holes = 0;  // removed points' places among the boxed ones
+    std::uint32_t boxed = 0;  // the points the boxes cover: the first ones
+    bool changed = false;     // since the last settle()
   };
 
   /** A bucket keeps up to this many points' storage when it empties or shrinks. */
@@ -78,12 +96,18 @@ class CellBuckets {
   void rehash(std::size_t size);
   /** Frees slot i and shifts back the entries after it that probed past it. */
   void erase(std::size_t i);
+  /** Notes that bucket b changed, for settle(). */
+  void markChanged(std::uint32_t b);
+  /** Bucket b without holes, boxed anew if crowded, its storage trimmed to its points. */
+  void rebox(std::uint32_t b);
 
   std::vector<Slot> slots_;  // a power of two, at most half full
   std::vector<std::vector<BucketPoint>> buckets_;
-  std::vector<Key> cell_of_;          // by bucket
-  std::vector<std::uint32_t> spare_;  // buckets no cell uses, kept for the next new cell
-  std::vector<std::uint64_t> where_;  // by point index: bucket << 32 | position in it
+  std::vector<std::vector<PointBox>> boxes_;  // by bucket: a crowded one's boxes
+  std::vector<Info> info_;                    // by bucket
+  std::vector<std::uint32_t> spare_;          // buckets no cell uses, kept for the next new cell
+  std::vector<std::uint32_t> changed_;        // buckets changed since the last settle(), each once
+  std::vector<std::uint64_t> where_;          // by point index: bucket << 32 | position in it
   std::size_t size_ = 0;
 };
 

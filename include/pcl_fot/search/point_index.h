@@ -107,12 +107,6 @@ class PointIndex {
   class Input;
   struct Extent;
   struct Placement;
-  /** A crowded run's point, while it is split into boxes. */
-  struct Slot {
-    float p[3];
-    std::int32_t index;
-  };
-
   /** Builds the tree of the points' cells, its grid centred on them (or on their bulk). */
   void placePoints(const Input& in, Extent& extent, Placement& placed);
   /** The rank of the occupied cell `k` in the tree's Morton order. */
@@ -121,10 +115,8 @@ class PointIndex {
   void fillTable(const Input& in, Placement& placed, std::uint64_t cells);
   /** The bounding box of each run's points (run_box_). */
   void boxRuns(std::uint64_t cells);
-  /** Splits the runs of more than Policy::kCrowded points into boxes (crowd_). */
+  /** Splits the runs of more than detail::kCrowded points into boxes (crowd_). */
   void splitCrowdedRuns(std::uint64_t cells);
-  /** Appends the box of run[begin, end) (table slots from `first`) and, recursively, its halves. */
-  void splitBox(std::vector<Slot>& run, std::uint32_t first, std::uint32_t begin, std::uint32_t end);
   /**
    * Moves the points into buckets, for the updates, their indices raised by `offset`, or each index i
    * replaced by renumber[i].
@@ -132,7 +124,8 @@ class PointIndex {
   void makeUpdatable(std::int32_t offset, const std::int32_t* renumber = nullptr);
   /** An automatic index whose cells hold far more or fewer points than it picks them for is built anew. */
   void refitGrid();
-  /** Marks a change: each thread's cached path and previous answer belong to the build before. */
+  /** Marks a change: the changed crowded buckets are split anew, and each thread's cached path and previous
+   * answer belong to the build before. */
   void changed();
   std::size_t search(const float q[3], std::size_t k, double bound, Metric metric,
                      std::vector<std::int32_t>& indices, std::vector<float>& distances) const;
@@ -149,16 +142,9 @@ class PointIndex {
   std::vector<std::int32_t> index_;             // their indices as given to build
   std::vector<std::array<float, 6>> run_box_;   // by rank: the box (low x, y, z, high x, y, z) of its points
   std::vector<std::array<float, 6>> word_box_;  // by pool word: the box of the points under it
-  /** A box of a crowded run's points: a leaf, or split in two at the median of its longest side. */
-  struct CrowdNode {
-    float lo[3], hi[3];
-    std::uint32_t begin, end;  // the points, in xyz_ / index_
-    std::uint32_t right;       // the second half's node, 0 for a leaf; the first half's follows this one
-    std::int32_t least_index;  // the smallest index of its points, for ties
-  };
-  // Crowded runs, too many points to scan whole, are split into boxes, in pre-order: crowd_root_ holds
-  // each one's cell rank and first node, by rank.
-  std::vector<CrowdNode> crowd_;
+  // Crowded runs, too many points to scan whole, are split into boxes (positions in xyz_ / index_), in
+  // pre-order: crowd_root_ holds each one's cell rank and first box, by rank.
+  std::vector<detail::PointBox> crowd_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> crowd_root_;
   // Once updated: each cell's points, the outliers under a key no cell has; the table above is then empty.
   bool updatable_ = false;
