@@ -1,10 +1,10 @@
 #pragma once
 
 #include <algorithm>
-#include <cmath>
 #include <functional>
 #include <limits>
 
+#include <pcl/common/point_tests.h>
 #include <pcl/console/print.h>
 
 #include <pcl_fot/detail/cloud_fingerprint.h>
@@ -13,14 +13,6 @@
 
 namespace pcl {
 namespace fot {
-namespace detail {
-/** Finite coordinates: a point a PointIndex holds (it leaves out the others). */
-template <typename PointT>
-inline bool finiteXYZ(const PointT& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
-}  // namespace detail
-
 namespace search {
 
 template <typename PointT>
@@ -87,7 +79,7 @@ void FastOctTreeSearch<PointT>::trackFreeIndices() {
     for (const index_t i : *this->indices_)
       if (i >= 0 && std::size_t(i) < input.size()) listed[std::size_t(i)] = true;
   for (std::size_t i = 0; i < input.size(); ++i)
-    if (!listed[i] || !detail::finiteXYZ(input[i])) free_.push_back(index_t(i));
+    if (!listed[i] || !pcl::isFinite(input[i])) free_.push_back(index_t(i));
   // Increasing: a min-heap as it is.
 }
 
@@ -129,7 +121,7 @@ template <typename PointT>
 std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud, Indices& indices) {
   trackFreeIndices();
   std::size_t finite = 0;
-  for (const PointT& p : cloud) finite += detail::finiteXYZ(p);
+  for (const PointT& p : cloud) finite += pcl::isFinite(p);
   const std::size_t slots = this->input_ ? this->input_->size() : 0;
   const std::size_t appended = finite > free_.size() ? finite - free_.size() : 0;
   if (slots + appended > std::size_t(std::numeric_limits<index_t>::max())) {
@@ -154,7 +146,7 @@ std::size_t FastOctTreeSearch<PointT>::addPoints(const PointCloud& cloud, Indice
   const auto lowest_first = std::greater<index_t>();
   index_t end = index_t(own.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (!detail::finiteXYZ(cloud[i])) {
+    if (!pcl::isFinite(cloud[i])) {
       indices[i] = UNAVAILABLE;
     } else if (!free_.empty()) {
       std::pop_heap(free_.begin(), free_.end(), lowest_first);
