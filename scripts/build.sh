@@ -3,5 +3,8 @@
 # headers are heavy). The test suite has its own tree, built with the sanitizers (scripts/test_sanitizers.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Ninja for new build trees (a tree configured before keeps its generator): it schedules the two jobs better
+# than make's recursive Makefiles. The other scripts do the same.
+export CMAKE_GENERATOR=${CMAKE_GENERATOR:-Ninja}
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPCL_FOT_BUILD_TESTS=OFF
 cmake --build build -j2

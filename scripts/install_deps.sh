@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  cmake make g++ pkg-config                          # build
+  cmake make ninja-build g++ pkg-config lld          # build (lld links the sanitizer trees' programs)
   libpcl-dev pcl-tools libeigen3-dev libflann-dev   # PCL, Eigen, FLANN
   libboost-dev googletest libgtest-dev              # Boost, GoogleTest
   liboctomap-dev libnanoflann-dev libbenchmark-dev  # reference peers for tests and benchmarks

@@ -5,13 +5,15 @@
 # Fix it, then copy that input into fuzz/regressions/<target>/: the test suite replays it from then on.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export CMAKE_GENERATOR=${CMAKE_GENERATOR:-Ninja}  # see scripts/build.sh
 seconds=${FUZZ_SECONDS:-60}
 # See scripts/test_sanitizers.sh for the Eigen allocator define.
 flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DPCL_FOT_POINT_TYPES="pcl::PointXYZ" -DPCL_FOT_BUILD_TESTS=OFF \
   -DPCL_FOT_BUILD_TOOLS=OFF -DPCL_FOT_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$flags" \
-  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined -fuse-ld=lld" \
+  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined -fuse-ld=lld" >/dev/null
 cmake --build build-fuzz -j2 --target fuzz_fot_loader fuzz_bt_import fuzz_ot_import fuzz_scan_insertion \
   fuzz_cloud_parser fuzz_point_index fuzz_psi fuzz_tree_ops fuzz_octree_point_cloud fuzz_options
 

@@ -5,6 +5,7 @@
 # scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export CMAKE_GENERATOR=${CMAKE_GENERATOR:-Ninja}  # see scripts/build.sh
 prefix="$PWD/build/package_test/prefix"
 rm -rf build/package_test
 cmake --install build --prefix "$prefix" >/dev/null

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include <pcl_fot/search/point_index.h>
@@ -130,12 +131,7 @@ class PointIndex::Policy {
       return;
     }
     const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
-    if (metric_ == Metric::Euclidean)
-      scanRun<Metric::Euclidean>(rank, begin, end);
-    else if (metric_ == Metric::EuclideanEigen)
-      scanRun<Metric::EuclideanEigen>(rank, begin, end);
-    else
-      scanRun<Metric::Manhattan>(rank, begin, end);
+    withMetric([&](auto metric) { scanRun<decltype(metric)::value>(rank, begin, end); });
   }
 
   /**
@@ -154,12 +150,7 @@ class PointIndex::Policy {
     std::uint32_t n;
     const detail::PointBox* boxes;
     const detail::BucketPoint* points = index_.buckets_.find(cell, n, boxes);
-    if (metric_ == Metric::Euclidean)
-      scanBucket<Metric::Euclidean>(points, n, boxes);
-    else if (metric_ == Metric::EuclideanEigen)
-      scanBucket<Metric::EuclideanEigen>(points, n, boxes);
-    else
-      scanBucket<Metric::Manhattan>(points, n, boxes);
+    withMetric([&](auto metric) { scanBucket<decltype(metric)::value>(points, n, boxes); });
   }
 
   /** k for every point within the bound. */
@@ -176,6 +167,19 @@ class PointIndex::Policy {
   }
 
  private:
+  /** Calls f with the metric as a compile-time constant: each scan is compiled once per metric. */
+  template <typename F>
+  void withMetric(F&& f) const {
+    switch (metric_) {
+      case Metric::Euclidean:
+        return f(std::integral_constant<Metric, Metric::Euclidean>());
+      case Metric::EuclideanEigen:
+        return f(std::integral_constant<Metric, Metric::EuclideanEigen>());
+      case Metric::Manhattan:
+        return f(std::integral_constant<Metric, Metric::Manhattan>());
+    }
+  }
+
   template <Metric M>
   void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
     const float* xyz = index_.xyz_.data();
