@@ -69,6 +69,8 @@ tool_test(Hostile.Options.RepeatedWithABadSecond COMMAND $<TARGET_FILE:fot_conve
           -res 0.1 -res abc EXIT 1 ONE_LINE_ERROR MATCH "option -res is given twice" ABSENT "${h}/x.fot")
 tool_test(Hostile.Options.RepeatedWithANegativeSecond COMMAND $<TARGET_FILE:fot_map> -res 0.1 -res -5
           EXIT 1 ONE_LINE_ERROR MATCH "option -res is given twice")
+tool_test(Hostile.Options.NegativeThreads COMMAND $<TARGET_FILE:fot_map> -threads -2 -out "${h}/t"
+          EXIT 1 ONE_LINE_ERROR MATCH "option -threads must not be negative" ABSENT "${h}/t.fot")
 tool_test(Hostile.Options.NumberWithTrailingText COMMAND $<TARGET_FILE:fot_map> -res 0.1m
           EXIT 1 ONE_LINE_ERROR MATCH "option -res needs a finite number")
 tool_test(Hostile.Options.StrayArgument COMMAND $<TARGET_FILE:fot_convert> "${h}/c.pcd" "${h}/y.fot" "${h}/z.fot"

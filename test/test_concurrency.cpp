@@ -280,6 +280,78 @@ TEST_P(Concurrency, OctreeLookAlikeSearchesFromManyThreads) {
   });
 }
 
+namespace {
+
+/** Equal canonical pools: the same words, and the same values bit for bit (an unknown cell's is NaN). */
+::testing::AssertionResult sameWords(const FastOctTree& a, const FastOctTree& b) {
+  const FastOctTree::CanonicalPool pa = a.canonicalPool(), pb = b.canonicalPool();
+  if (pa.words != pb.words) return ::testing::AssertionFailure() << "the pools' words differ";
+  if (pa.values.size() != pb.values.size() ||
+      (!pa.values.empty() &&
+       std::memcmp(pa.values.data(), pb.values.data(), pa.values.size() * sizeof(float)) != 0))
+    return ::testing::AssertionFailure() << "the pools' values differ";
+  return ::testing::AssertionSuccess();
+}
+
+/** Inserts the scans with `threads` threads; the statistics of all scans are summed in `total`. */
+FastOctTree mapOnThreads(const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr>& scans, UpdateRule rule,
+                         unsigned threads, ScanStats& total) {
+  FastOctTree t(0.05);
+  t.setUpdateRule(rule);
+  ScanOptions options;
+  options.threads = threads;
+  total = ScanStats();
+  for (const auto& scan : scans) {
+    const ScanStats s = insertScan(t, *scan, options);
+    total.ray_cells += s.ray_cells;
+    total.free_cells += s.free_cells;
+  }
+  return t;
+}
+
+/** One, two, three and eight threads build the same map, word for word, and count the same cells. */
+void expectSameMapOnAnyThreadCount(const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr>& scans) {
+  for (UpdateRule rule : {UpdateRule::LogOdds, UpdateRule::Binary}) {
+    SCOPED_TRACE(rule == UpdateRule::LogOdds ? "log-odds" : "binary");
+    ScanStats one_stats;
+    const FastOctTree one = mapOnThreads(scans, rule, 1, one_stats);
+    EXPECT_GT(one.getFreeCount(), 0u);
+    for (unsigned threads : {2u, 3u, 8u}) {
+      ScanStats stats;
+      EXPECT_TRUE(sameWords(mapOnThreads(scans, rule, threads, stats), one)) << threads << " threads";
+      EXPECT_EQ(stats.ray_cells, one_stats.ray_cells) << threads << " threads";
+      if (rule == UpdateRule::LogOdds) {
+        EXPECT_EQ(stats.free_cells, one_stats.free_cells) << threads << " threads";
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_P(Concurrency, ScanInsertionOnAnyThreadCountGivesTheSameMapWordForWord) {
+  expectSameMapOnAnyThreadCount({pcl_fot_test::loadScan("room_scan1.pcd")});
+}
+
+TEST(ConcurrencyOnRandomScans, ScanInsertionOnAnyThreadCountGivesTheSameMapWordForWord) {
+  // Points scattered around the sensor, near and far, NaNs among them: rays enough for eight threads.
+  std::mt19937 rng(47);
+  std::normal_distribution<float> spread(0.0f, 2.0f);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr scan(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 36000; ++i)
+    scan->push_back(i % 997 == 0 ? pcl::PointXYZ(NAN, 0.0f, 0.0f)
+                                 : pcl::PointXYZ(spread(rng), spread(rng), 0.5f * spread(rng)));
+  scan->sensor_origin_ = Eigen::Vector4f(0.3f, -0.2f, 0.1f, 1.0f);
+  expectSameMapOnAnyThreadCount({scan});
+
+  // One scan into an empty log-odds map: each cell it marks free holds one miss, so the free cells counted
+  // while inserting are the map's free cells.
+  ScanStats stats;
+  const FastOctTree one = mapOnThreads({scan}, UpdateRule::LogOdds, 2, stats);
+  EXPECT_EQ(stats.free_cells, one.getFreeCount());
+  EXPECT_LT(stats.free_cells, stats.ray_cells) << "rays cross cells near the sensor again and again";
+}
+
 TEST_P(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {
   const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
   EXPECT_EQ(detail::workerCount(0, 1000), std::min<std::size_t>(hardware, 1000));

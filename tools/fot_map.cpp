@@ -47,6 +47,8 @@ void printHelp(const char* prog) {
       "  -hit <p>          probability of a hit (default: 0.7), -miss <p> of a miss (default: 0.4)\n"
       "  -clamp_min <p>    clamping thresholds (defaults: 0.1192, 0.971), -clamp_max <p>\n"
       "  -occupancy <p>    occupancy threshold (default: 0.5)\n"
+      "  -threads <n>      threads that walk each scan's rays (default: 0, all); the map does not depend on "
+      "it\n"
       "  -out <prefix>     output prefix (default: fot_map); writes <prefix>.fot, <prefix>_occupied.pcd\n"
       "                    (voxel centres coloured by height) and <prefix>_mesh.vtk (voxel cubes)\n"
       "  -free             also write <prefix>_states.pcd: occupied and free voxel centres, coloured by "
@@ -234,7 +236,7 @@ int main(int argc, char** argv) {
   return runTool("fot_map", "fot_map [options] [scan1.pcd|.ply scan2.pcd ...]", [&] {
     const Arguments args(argc, argv,
                          {"-res", "-poses", "-max_range", "-min_range", "-out", "-hit", "-miss", "-clamp_min",
-                          "-clamp_max", "-occupancy"},
+                          "-clamp_max", "-occupancy", "-threads"},
                          {"-free", "-binary", "-h", "--help"});
     if (args.helpAsked()) {
       printHelp("fot_map");
@@ -247,6 +249,11 @@ int main(int argc, char** argv) {
     args.getPositive("-max_range", options.max_range);
     if (args.get("-min_range", options.min_range) && options.min_range < 0)
       throw ToolError(kExitUsage, "option -min_range must not be negative");
+    int threads = 0;
+    if (args.get("-threads", threads)) {
+      if (threads < 0) throw ToolError(kExitUsage, "option -threads must not be negative");
+      options.threads = unsigned(threads);
+    }
     args.get("-out", out);
     const bool with_poses = args.get("-poses", pose_file);
     requireWritableDirectory(out + ".fot");

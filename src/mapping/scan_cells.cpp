@@ -38,6 +38,14 @@ ScanCells::Block& ScanCells::find(const std::uint32_t (&b)[3]) {
   }
 }
 
+void ScanCells::join(const ScanCells& other) {
+  for (const Block& o : other.blocks_) {
+    Block& b = find(o.at);
+    b.passed |= o.passed;
+    b.hit |= o.hit;
+  }
+}
+
 void ScanCells::grow() {
   ++bits_;
   slots_.assign(std::size_t(1) << bits_, 0);

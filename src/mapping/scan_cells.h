@@ -15,8 +15,8 @@ namespace detail {
 /**
  * The cells one scan updates, as OctoMap's computeUpdate collects them in its two key sets: every cell a
  * ray passes, and every endpoint's cell, each once. They are kept a 4×4×4 block at a time (tree coordinates
- * / 4, cells as block_cells bits), in the order the rays first reach each block, so that writing them in
- * that order keeps LineBurstAccess's paths short.
+ * / 4, cells as block_cells bits), in the order the rays first reach each block (share by share, once
+ * joined), so that writing them in that order keeps LineBurstAccess's paths short.
  */
 class ScanCells {
  public:
@@ -35,6 +35,8 @@ class ScanCells {
   void pass(std::uint32_t index, std::uint64_t cells) { blocks_[index].passed |= cells; }
   void pass(const Key& k) { cell(k, &Block::passed); }
   void hit(const Key& k) { cell(k, &Block::hit); }
+  /** Adds another share's cells: its blocks new here come after this one's, in its order. */
+  void join(const ScanCells& other);
 
   const std::vector<Block>& blocks() const { return blocks_; }
 

@@ -1,12 +1,16 @@
 #include <pcl_fot/mapping/scan_insertion.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <unordered_set>
 #include <vector>
 
 #include <pcl_fot/detail/bits.h>
+#include <pcl_fot/detail/worker_threads.h>
 #include <pcl_fot/tree/accessor.h>
 
 #include "mapping/block_ray_walker.h"
@@ -16,6 +20,11 @@ namespace pcl {
 namespace fot {
 namespace {
 
+/** Rays a thread takes at a time: neighbours in a scan cross the same blocks, and threads rarely meet. */
+constexpr std::size_t kRaysPerRun = 2048;
+/** Fewer rays than this a thread are walked on fewer threads: starting one costs more than it saves. */
+constexpr std::size_t kRaysPerShare = 4096;
+
 /** Calls `visit(const Key&)` for each cell of the walker's stretch `i`. */
 template <typename Visit>
 void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& visit) {
@@ -23,6 +32,90 @@ void forEachCell(const detail::BlockRayWalker& walker, std::size_t i, Visit&& vi
   walker.block(walker.blockKey(i), block);
   for (std::uint64_t cells = walker.cells(i); cells != 0; cells &= cells - 1)
     visit(detail::block_cells::cellKey(block, detail::lowestBit(cells)));
+}
+
+/** A ray may step one cell past its end keys; keep those cells inside the key range too. */
+bool traceable(const Key& k) {
+  return k.x > kMinKey && k.x < kMaxKey && k.y > kMinKey && k.y < kMaxKey && k.z > kMinKey && k.z < kMaxKey;
+}
+
+/** A scan's rays, checked: each ends at a valid key that keeps its cells inside the key range. */
+struct ScanRays {
+  std::vector<float> ends;  // xyz of each ray's end that the walker reaches
+  std::vector<float> far;   // the ends of rays too long for the walker's words (see BlockRayWalker::kReach)
+  std::vector<Key> endpoints;  // the cells of the rays that end at their point
+};
+
+/** The scan's points checked and made rays; bad points are counted in `stats` and left out. */
+ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* xyz, std::size_t count,
+                     std::size_t stride_bytes, const ScanOptions& options, ScanStats& stats) {
+  if (!std::isfinite(sensor[0]) || !std::isfinite(sensor[1]) || !std::isfinite(sensor[2]))
+    throw std::invalid_argument("pcl::fot::insertRays: the sensor position is not finite");
+  Key sensor_key;
+  if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], sensor_key) || !traceable(sensor_key))
+    throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
+
+  ScanRays rays;
+  rays.ends.reserve(3 * count);
+  const auto addRay = [&](const float* end, const Key& end_key) {
+    std::vector<float>& to = detail::BlockRayWalker::reaches(sensor_key, end_key) ? rays.ends : rays.far;
+    to.insert(to.end(), end, end + 3);
+    ++stats.rays;
+  };
+  rays.endpoints.reserve(count);
+  std::unordered_set<Key, KeyHash> seen;  // the cells of the points so far, with discretize
+  const char* bytes = reinterpret_cast<const char*>(xyz);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      ++stats.non_finite;
+      continue;
+    }
+    float centre[3];
+    if (options.discretize) {  // OctoMap's computeDiscreteUpdate: each cell once, its centre as a float
+      Key k;
+      if (!grid.pointToKey(p[0], p[1], p[2], k)) {
+        ++stats.out_of_range;
+        continue;
+      }
+      if (!seen.insert(k).second) {
+        ++stats.merged;
+        continue;
+      }
+      const std::int32_t key[3] = {k.x, k.y, k.z};
+      for (unsigned a = 0; a < 3; ++a) centre[a] = float(grid.keyToCoord(key[a], a));
+      p = centre;
+    }
+    // OctoMap's arithmetic: a float difference, its squared norm summed in float.
+    const float d[3] = {p[0] - sensor[0], p[1] - sensor[1], p[2] - sensor[2]};
+    const double dist = std::sqrt(double(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    if (dist < options.min_range) {
+      ++stats.too_close;
+      continue;
+    }
+    if (options.max_range > 0.0 && dist > options.max_range) {
+      const float len = float(dist), range = float(options.max_range);
+      const float end[3] = {sensor[0] + d[0] / len * range, sensor[1] + d[1] / len * range,
+                            sensor[2] + d[2] / len * range};
+      Key end_key;
+      if (!grid.pointToKey(end[0], end[1], end[2], end_key) || !traceable(end_key)) {
+        ++stats.out_of_range;
+        continue;
+      }
+      addRay(end, end_key);
+      ++stats.truncated;
+      continue;
+    }
+    Key key;
+    if (!grid.pointToKey(p[0], p[1], p[2], key) || !traceable(key)) {
+      ++stats.out_of_range;
+      continue;
+    }
+    addRay(p, key);
+    rays.endpoints.push_back(key);
+  }
+  stats.occupied = rays.endpoints.size();
+  return rays;
 }
 
 /**
@@ -75,7 +168,6 @@ class TreeWriter {
 
   void freeCell(const Key& k) { accessor_.setValidCell(k, CellState::Free); }
   void occupied(const Key& k) { accessor_.setValidCell(k, CellState::Occupied); }
-  void finish() {}
 
  private:
   /** Cells this writer made free in one 4×4×4 block: they stay free until the scan's endpoints. */
@@ -137,63 +229,53 @@ class GridWriter {
   void occupied(const Key& k) {
     if (grid_.contains(k)) grid_.setCell(k, CellState::Occupied);
   }
-  void finish() {}
 
  private:
   FastOccMesh& grid_;
 };
 
+/** Walks the rays on this thread, handing their cells to `writer` as they come. */
+template <typename Writer>
+void streamCells(Writer& writer, const CellGrid& grid, const float sensor[3], const ScanRays& rays,
+                 ScanStats& stats) {
+  detail::BlockRayWalker walker(grid, sensor, rays.ends.data(), rays.ends.size() / 3);
+  while (const std::size_t n = walker.next()) writer.freeStretches(walker, n);
+  writer.finishFree(walker);
+  stats.ray_cells = walker.cellCount();
+  for (std::size_t i = 0; i < rays.far.size(); i += 3)
+    stats.ray_cells += traceSegment(grid, sensor, &rays.far[i], [&](const Key& k) { writer.freeCell(k); });
+  // Endpoints last: within a scan, occupied wins over free.
+  for (const Key& k : rays.endpoints) writer.occupied(k);
+}
+
 /**
- * The log-odds rule. The scan's cells are gathered first, each once (ScanCells), and then updated a leaf at
- * a time: a miss for each passed cell, a hit for each endpoint's. A miss on a settled free cell changes
- * nothing, so when the tree reports a settled free cube around a leaf, the blocks after it that lie in that
- * cube and have no endpoint are passed over: the last visited node answers for them.
+ * One share of a scan's rays walked, and their cells gathered, each once (ScanCells). Neighbouring rays cross
+ * the same blocks: a small table of the walker's block keys, in cache, answers most stretches before the
+ * scan's table is probed.
  */
-class LogOddsWriter {
+class CellGatherer {
  public:
-  LogOddsWriter(FastOctTree& t, bool line_burst, std::size_t rays)
-      : accessor_(t, line_burst), cells_(rays < 1024 ? 1024 : rays), recent_(kRecent) {}
+  explicit CellGatherer(std::size_t rays) : cells_(rays < 1024 ? 1024 : rays), recent_(kRecent) {}
 
-  void freeStretches(const detail::BlockRayWalker& walker, std::size_t n) {
-    for (std::size_t i = 0; i < n; ++i) {
-      // Neighbouring rays cross the same blocks: a small table of the walker's block keys, in cache,
-      // answers most stretches before the scan's table is probed.
-      const std::uint64_t key = walker.blockKey(i);
-      Recent& r = recent_[(key * 0x9E3779B97F4A7C15u) >> (64 - kRecentBits)];
-      if (r.key != key) {
-        std::uint32_t block[3];
-        walker.block(key, block);
-        r = Recent{key, cells_.index(block)};
-      }
-      cells_.pass(r.index, walker.cells(i));
-    }
-  }
-  void finishFree(const detail::BlockRayWalker&) {}
-  void freeCell(const Key& k) { cells_.pass(k); }
-  void occupied(const Key& k) { cells_.hit(k); }
-
-  void finish() {
-    std::uint32_t cube[3] = {0, 0, 0};
-    unsigned cube_shift = 32;  // no cube yet
-    for (const detail::ScanCells::Block& b : cells_.blocks()) {
-      const std::uint64_t miss = b.passed & ~b.hit;
-      if (b.hit == 0 && cube_shift < 32 &&
-          ((b.at[0] ^ cube[0]) | (b.at[1] ^ cube[1]) | (b.at[2] ^ cube[2])) >> cube_shift == 0)
-        continue;
-      for (std::uint64_t p = miss | b.hit; p != 0;) {
-        const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(p));
-        const unsigned skip = accessor_.updateLeaf(detail::block_cells::leafKey(b.at, leaf),
-                                                   detail::block_cells::leafMask(miss, leaf),
-                                                   detail::block_cells::leafMask(b.hit, leaf));
-        p &= ~detail::block_cells::leafBits(leaf);
-        if (skip >= 2 && b.hit == 0) {  // a settled free cube of whole blocks: this one and those in it
-          cube_shift = skip - 2;
-          for (int a = 0; a < 3; ++a) cube[a] = b.at[a];
-          break;
+  /** Walks `count` rays, their ends as xyz triples; returns the cells walked. */
+  std::uint64_t walk(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count) {
+    detail::BlockRayWalker walker(grid, sensor, ends, count);
+    while (const std::size_t n = walker.next()) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::uint64_t key = walker.blockKey(i);
+        Recent& r = recent_[(key * 0x9E3779B97F4A7C15u) >> (64 - kRecentBits)];
+        if (r.key != key) {
+          std::uint32_t block[3];
+          walker.block(key, block);
+          r = Recent{key, cells_.index(block)};
         }
+        cells_.pass(r.index, walker.cells(i));
       }
     }
+    return walker.cellCount();
   }
+
+  detail::ScanCells& cells() { return cells_; }
 
  private:
   struct Recent {
@@ -203,110 +285,102 @@ class LogOddsWriter {
   static constexpr unsigned kRecentBits = 12;
   static constexpr std::size_t kRecent = std::size_t(1) << kRecentBits;
 
-  Accessor accessor_;
   detail::ScanCells cells_;
   std::vector<Recent> recent_;
 };
 
-/** A ray may step one cell past its end keys; keep those cells inside the key range too. */
-bool traceable(const Key& k) {
-  return k.x > kMinKey && k.x < kMaxKey && k.y > kMinKey && k.y < kMaxKey && k.z > kMinKey && k.z < kMaxKey;
+/**
+ * The scan's cells, each once, as OctoMap's computeUpdate collects them. The rays are cut into runs that
+ * `workers` threads take in turn, each gathering the cells of its runs; their cells are then joined. A cell's
+ * update depends only on whether some ray passes it or ends in it, so the cells are the same for any count.
+ */
+detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const ScanRays& rays,
+                              std::size_t workers, ScanStats& stats) {
+  const std::size_t count = rays.ends.size() / 3, runs = (count + kRaysPerRun - 1) / kRaysPerRun;
+  std::vector<std::unique_ptr<CellGatherer>> shares(workers);
+  std::vector<std::uint64_t> walked(workers, 0);
+  std::atomic<std::size_t> next_run{0};
+  detail::runWorkers(workers, [&](std::size_t w) {
+    shares[w] = std::make_unique<CellGatherer>(count / workers);
+    for (std::size_t r; (r = next_run.fetch_add(1, std::memory_order_relaxed)) < runs;) {
+      const std::size_t begin = r * kRaysPerRun, n = std::min(kRaysPerRun, count - begin);
+      walked[w] += shares[w]->walk(grid, sensor, rays.ends.data() + 3 * begin, n);
+    }
+  });
+  detail::ScanCells cells = std::move(shares[0]->cells());
+  for (std::size_t w = 1; w < workers; ++w) {
+    cells.join(shares[w]->cells());
+    shares[w].reset();
+  }
+  for (const std::uint64_t n : walked) stats.ray_cells += n;
+  for (std::size_t i = 0; i < rays.far.size(); i += 3)
+    stats.ray_cells += traceSegment(grid, sensor, &rays.far[i], [&](const Key& k) { cells.pass(k); });
+  for (const Key& k : rays.endpoints) cells.hit(k);
+  return cells;
 }
 
-template <typename Writer>
-ScanStats insert(Writer& writer, const CellGrid& grid, const float sensor[3], const float* xyz,
-                 std::size_t count, std::size_t stride_bytes, const ScanOptions& options) {
-  if (!std::isfinite(sensor[0]) || !std::isfinite(sensor[1]) || !std::isfinite(sensor[2]))
-    throw std::invalid_argument("pcl::fot::insertRays: the sensor position is not finite");
-  Key sensor_key;
-  if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], sensor_key) || !traceable(sensor_key))
-    throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
-
-  ScanStats stats;
-  std::vector<float> ends;  // xyz of each ray's end
-  ends.reserve(3 * count);
-  std::vector<float> far;  // the ends of rays too long for the walker's words (see BlockRayWalker::kReach)
-  const auto addRay = [&](const float* end, const Key& end_key) {
-    std::vector<float>& to = detail::BlockRayWalker::reaches(sensor_key, end_key) ? ends : far;
-    to.insert(to.end(), end, end + 3);
-    ++stats.rays;
-  };
-  std::vector<Key> endpoints;
-  endpoints.reserve(count);
-  std::unordered_set<Key, KeyHash> seen;  // the cells of the points so far, with discretize
-  const char* bytes = reinterpret_cast<const char*>(xyz);
-  for (std::size_t i = 0; i < count; ++i) {
-    const float* p = reinterpret_cast<const float*>(bytes + i * stride_bytes);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      ++stats.non_finite;
+/**
+ * Writes the scan's cells a leaf at a time, in the order the rays first reached their blocks, which keeps
+ * LineBurstAccess's paths short: `write(leaf key, miss mask, hit mask)` returns what
+ * Accessor::setValidLeafCells returns. A block without endpoints changes nothing in a settled free cube,
+ * so when the tree reports one around a leaf, the blocks after it that lie in that cube and have no
+ * endpoint are passed over: the last visited node answers for them. Returns the cells marked free.
+ */
+template <typename Write>
+std::uint64_t writeCells(const detail::ScanCells& cells, Write&& write) {
+  std::uint32_t cube[3] = {0, 0, 0};
+  unsigned cube_shift = 32;  // no cube yet
+  std::uint64_t free = 0;
+  for (const detail::ScanCells::Block& b : cells.blocks()) {
+    const std::uint64_t miss = b.passed & ~b.hit;
+    free += std::uint64_t(__builtin_popcountll(miss));
+    if (b.hit == 0 && cube_shift < 32 &&
+        ((b.at[0] ^ cube[0]) | (b.at[1] ^ cube[1]) | (b.at[2] ^ cube[2])) >> cube_shift == 0)
       continue;
-    }
-    float centre[3];
-    if (options.discretize) {  // OctoMap's computeDiscreteUpdate: each cell once, its centre as a float
-      Key k;
-      if (!grid.pointToKey(p[0], p[1], p[2], k)) {
-        ++stats.out_of_range;
-        continue;
+    for (std::uint64_t p = miss | b.hit; p != 0;) {
+      const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(p));
+      const unsigned skip =
+          write(detail::block_cells::leafKey(b.at, leaf), detail::block_cells::leafMask(miss, leaf),
+                detail::block_cells::leafMask(b.hit, leaf));
+      p &= ~detail::block_cells::leafBits(leaf);
+      if (skip >= 2 && b.hit == 0) {  // a settled free cube of whole blocks: this one and those in it
+        cube_shift = skip - 2;
+        for (int a = 0; a < 3; ++a) cube[a] = b.at[a];
+        break;
       }
-      if (!seen.insert(k).second) {
-        ++stats.merged;
-        continue;
-      }
-      const std::int32_t key[3] = {k.x, k.y, k.z};
-      for (unsigned a = 0; a < 3; ++a) centre[a] = float(grid.keyToCoord(key[a], a));
-      p = centre;
     }
-    // OctoMap's arithmetic: a float difference, its squared norm summed in float.
-    const float d[3] = {p[0] - sensor[0], p[1] - sensor[1], p[2] - sensor[2]};
-    const double dist = std::sqrt(double(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-    if (dist < options.min_range) {
-      ++stats.too_close;
-      continue;
-    }
-    if (options.max_range > 0.0 && dist > options.max_range) {
-      const float len = float(dist), range = float(options.max_range);
-      const float end[3] = {sensor[0] + d[0] / len * range, sensor[1] + d[1] / len * range,
-                            sensor[2] + d[2] / len * range};
-      Key end_key;
-      if (!grid.pointToKey(end[0], end[1], end[2], end_key) || !traceable(end_key)) {
-        ++stats.out_of_range;
-        continue;
-      }
-      addRay(end, end_key);
-      ++stats.truncated;
-      continue;
-    }
-    Key key;
-    if (!grid.pointToKey(p[0], p[1], p[2], key) || !traceable(key)) {
-      ++stats.out_of_range;
-      continue;
-    }
-    addRay(p, key);
-    endpoints.push_back(key);
   }
-  detail::BlockRayWalker walker(grid, sensor, ends.data(), ends.size() / 3);
-  while (const std::size_t n = walker.next()) writer.freeStretches(walker, n);
-  writer.finishFree(walker);
-  stats.ray_cells = walker.cellCount();
-  for (std::size_t i = 0; i < far.size(); i += 3)
-    stats.ray_cells += traceSegment(grid, sensor, &far[i], [&](const Key& k) { writer.freeCell(k); });
-  // Endpoints last: within a scan, occupied wins over free.
-  for (const Key& k : endpoints) writer.occupied(k);
-  stats.occupied = endpoints.size();
-  writer.finish();
-  return stats;
+  return free;
 }
 
 }  // namespace
 
 ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, std::size_t count,
                      std::size_t stride_bytes, const ScanOptions& options) {
-  if (options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds) {
-    LogOddsWriter writer(map, options.line_burst, count);
-    return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+  const CellGrid& grid = map.getGrid();
+  ScanStats stats;
+  const ScanRays rays = prepareRays(grid, sensor, xyz, count, stride_bytes, options, stats);
+  const bool log_odds = options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds;
+  const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
+  if (!log_odds && workers == 1) {
+    TreeWriter writer(map, options.line_burst, count);
+    streamCells(writer, grid, sensor, rays, stats);
+    return stats;
   }
-  TreeWriter writer(map, options.line_burst, count);
-  return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+  const detail::ScanCells cells = gatherCells(grid, sensor, rays, workers, stats);
+  Accessor accessor(map, options.line_burst);
+  if (log_odds) {
+    stats.free_cells = writeCells(cells, [&](const Key& k, std::uint32_t miss, std::uint32_t hit) {
+      return accessor.updateLeaf(k, miss, hit);
+    });
+    return stats;
+  }
+  stats.free_cells = writeCells(cells, [&](const Key& k, std::uint32_t free, std::uint32_t occupied) {
+    const unsigned skip = free ? accessor.setValidLeafCells(k, free, CellState::Free) : 0;
+    if (occupied) accessor.setValidLeafCells(k, occupied, CellState::Occupied);
+    return skip;
+  });
+  return stats;
 }
 
 ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, std::size_t count,
@@ -314,8 +388,11 @@ ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, 
   if (options.rule == UpdateRule::LogOdds)
     throw std::invalid_argument(
         "pcl::fot::insertRays: the dense grid keeps no log-odds; use the Binary rule");
+  ScanStats stats;
+  const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, stats);
   GridWriter writer(map);
-  return insert(writer, map.getGrid(), sensor, xyz, count, stride_bytes, options);
+  streamCells(writer, map.getGrid(), sensor, rays, stats);
+  return stats;
 }
 
 }  // namespace fot

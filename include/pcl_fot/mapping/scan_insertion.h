@@ -24,6 +24,12 @@ struct ScanOptions {
    * rays, slightly different free cells.
    */
   bool discretize = false;
+  /**
+   * Threads that walk the rays into the tree; 0 takes every hardware thread. Each walks a share of the rays
+   * and gathers its cells, the shares are joined and the tree written once: the map is the same, word for
+   * word, for any count. A binary scan on one thread writes as it walks instead. The grid walks on one.
+   */
+  unsigned threads = 0;
 };
 
 struct ScanStats {
@@ -35,6 +41,11 @@ struct ScanStats {
   std::size_t out_of_range = 0;  ///< points beyond the key range, skipped
   std::size_t merged = 0;        ///< points whose cell an earlier point of the scan had (discretize only)
   std::uint64_t ray_cells = 0;   ///< cells the rays pass, each a Free write for the grid; endpoints excluded
+  /**
+   * Distinct cells marked free (passed, no endpoint): ray_cells counts each once per ray. Counted where the
+   * cells are gathered before the tree is written (the log-odds rule, or more than one thread); 0 elsewhere.
+   */
+  std::uint64_t free_cells = 0;
 };
 
 /**
