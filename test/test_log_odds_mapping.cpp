@@ -189,6 +189,37 @@ TEST(LogOddsMapping, AnObjectThatMovesAwayIsFreedByEvidenceEqualsOctoMap) {
   EXPECT_FLOAT_EQ(all.getLogOdds(box), SensorModel().hitLogOdds() + 3 * SensorModel().missLogOdds());
 }
 
+TEST(LogOddsMapping, ForEachLogOddsGivesEveryKnownCellOnceWithItsValueAndSettledCubesWhole) {
+  const Sequence once = movingObject();
+  Sequence scans = once;
+  scans.insert(scans.end(), once.begin(), once.end());  // eight scans: the wall and free space settle
+  const FastOctTree map = oursOf(scans, 0.05, true, false);
+  const SensorModel model;
+  std::uint64_t cells = 0, unsettled = 0, cubes = 0;
+  map.forEachLogOdds([&](const Region& r, float log_odds) {
+    const std::int32_t last = (std::int32_t(1) << r.level) - 1;
+    for (const Key& k : {r.min_key, Key{r.min_key.x + last, r.min_key.y + last, r.min_key.z + last}}) {
+      EXPECT_EQ(bits(map.getLogOdds(k)), bits(log_odds)) << toString(k);
+      EXPECT_EQ(map.getCell(k), r.state) << toString(k);
+    }
+    const bool settled = log_odds == model.clampMinLogOdds() || log_odds == model.clampMaxLogOdds();
+    if (r.level > 0) {
+      EXPECT_TRUE(settled) << "a cube holds one value only where its cells have settled";
+      ++cubes;
+    }
+    cells += std::uint64_t(1) << (3 * r.level);
+    unsettled += !settled;
+  });
+  EXPECT_EQ(cells, map.getFreeCount() + map.getOccupiedCount());
+  EXPECT_EQ(unsettled, map.getUnsettledCount());
+  EXPECT_GT(unsettled, 0u) << "the box's face: one hit, then misses";
+  EXPECT_GT(cubes, 0u);
+
+  int visits = 0;
+  map.forEachLogOdds([&](const Region&, float) { return ++visits < 3; });
+  EXPECT_EQ(visits, 3) << "a visitor that returns false stops the walk";
+}
+
 TEST(LogOddsMapping, BinaryRuleStaysTheLatestScanPerMapOrPerCall) {
   const Sequence scans = movingObject();
   FastOctTree per_map(0.05), per_call(0.05);

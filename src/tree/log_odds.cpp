@@ -297,24 +297,13 @@ void FastOctTree::merge(const FastOctTree& other) {
     merge(copy);
     return;
   }
-  auto walk = [&](auto& self, std::size_t at, const NodeView& n) -> void {
-    if (n.isUniform()) {
-      if (n.uniformState() != CellState::Unknown)
-        updateCube(n.corner, n.level, other.settledValue(n.uniformState()));
-      return;
-    }
-    if (n.level == 1 && node::isBitmap(n.word)) {  // a leaf: its cells one by one
-      Accessor accessor(*this, true);
-      for (unsigned o = 0; o < 8; ++o) {
-        const float v = other.leafValue(at, o);
-        if (!std::isnan(v)) accessor.updateCell(n.corner.child(o, 0).key(), v);
-      }
-      return;
-    }
-    for (unsigned o = 0; o < 8; ++o)
-      self(self, n.isBitmap() ? at : n.childOffset(o), n.child(other.words_.data(), o));
-  };
-  walk(walk, 0, other.root());
+  Accessor accessor(*this, true);
+  other.forEachLogOdds([&](const Region& r, float log_odds) {
+    if (r.level == 0)
+      accessor.updateCell(r.min_key, log_odds);
+    else
+      updateCube(TreeCoord(r.min_key), r.level, log_odds);  // a settled cube: whole cubes at once
+  });
 }
 
 }  // namespace fot

@@ -152,6 +152,14 @@ class FastOctTree {
   /** Visits every cell holding `state` (other than Unknown) in Morton order: visit(const Key&). */
   template <typename Visitor>
   void forEachCell(CellState state, Visitor&& visit) const;
+  /**
+   * Visits every known cell with its log-odds in Morton order, without a lookup per cell: visit(const
+   * Region&, float), which may return false to stop the walk. A settled cube comes whole, with its clamp; a
+   * cell between the clamps comes alone (level 0), with its float. Exporting or comparing a map reads it this
+   * way.
+   */
+  template <typename Visitor>
+  void forEachLogOdds(Visitor&& visit) const;
 
   std::uint64_t getOccupiedCount() const { return counts_[std::size_t(CellState::Occupied)]; }
   std::uint64_t getFreeCount() const { return counts_[std::size_t(CellState::Free)]; }
@@ -333,6 +341,9 @@ class FastOctTree {
   /** Visits the maximal uniform known cubes below the node, skipping subtrees `overlaps` rejects. */
   template <typename Overlaps, typename Visitor>
   bool walkRegions(const NodeView& n, Overlaps& overlaps, Visitor& visit) const;
+  /** forEachLogOdds below the word at pool offset `at`, of the given level and corner. */
+  template <typename Visitor>
+  bool walkLogOdds(std::size_t at, unsigned level, const TreeCoord& corner, Visitor& visit) const;
 
   CellGrid grid_;
   std::vector<NodeWord> words_;  // block b is words_[8b .. 8b+7]; words_[0] is the root
@@ -416,6 +427,38 @@ void FastOctTree::forEachRegionOutsideBox(const Key& lo, const Key& hi, Visitor&
            c.z + last > hi.z;
   };
   walkRegions(root(), reaches_out, visit);
+}
+
+template <typename Visitor>
+void FastOctTree::forEachLogOdds(Visitor&& visit) const {
+  walkLogOdds(0, root_level_, base_, visit);
+}
+
+template <typename Visitor>
+bool FastOctTree::walkLogOdds(std::size_t at, unsigned level, const TreeCoord& corner, Visitor& visit) const {
+  const auto call = [&](const Region& region, float log_odds) {
+    if constexpr (std::is_same<decltype(visit(region, log_odds)), bool>::value) {
+      return visit(region, log_odds);
+    } else {
+      visit(region, log_odds);
+      return true;
+    }
+  };
+  const NodeWord w = words_[at];
+  if (node::isUniform(w)) {
+    const CellState s = node::uniformState(w);
+    return s == CellState::Unknown || call(Region{corner.key(), level, s}, settledValue(s));
+  }
+  for (unsigned o = 0; o < 8; ++o) {
+    const TreeCoord c = corner.child(o, level - 1);
+    if (!node::isBitmap(w)) {
+      if (!walkLogOdds(node::childOffset(w, o), level - 1, c, visit)) return false;
+      continue;
+    }
+    const CellState s = node::state(w, o);  // an octant of a bitmap is uniform; a leaf's may hold a float
+    if (s != CellState::Unknown && !call(Region{c.key(), level - 1, s}, leafValue(at, o))) return false;
+  }
+  return true;
 }
 
 template <typename Visitor>
