@@ -2,12 +2,14 @@
 // the origin or at the edges of the key range), a spacing and a memory cap, then writes cells and boxes of
 // any state, directly and through accessors with and without LineBurstAccess, including keys beyond the
 // range. Afterwards the tree must hold exactly the model's cells: counts, reads, Morton-ordered iteration,
-// regions in a box, canonical form, the canonical pool and a tree written in the reverse order, a round
+// regions in a box, canonical form, the canonical pool and a tree written in the reverse order, the tree
+// compacted by shrinkToFit and written again, a round
 // trip through .fot and through OctoMap's .bt, and the nearest-cell search in both metrics against brute
 // force.
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -184,6 +186,17 @@ void checkTree(const FastOctTree& t, const Model& model, const std::vector<Key>&
   const FastOctTree::CanonicalPool pool = t.canonicalPool();
   check(reversed.canonicalPool().words == pool.words);
   check(FastOctTree::fromCanonicalPool(t.getGrid(), pool) == t);
+
+  // shrinkToFit keeps every cell and leaves no free block, and the shrunk tree takes writes as before.
+  FastOctTree shrunk = t, unshrunk = t;
+  shrunk.shrinkToFit();
+  check(shrunk == t && shrunk.canonicalPool().words == pool.words);
+  check(shrunk.poolWords() == 8 * (1 + shrunk.getBlockCount()));
+  for (FastOctTree* tree : {&shrunk, &unshrunk}) {
+    tree->setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());  // the shrunk pool has more room left
+    for (std::size_t i = 0; i < queries.size(); ++i) tree->setCell(queries[i], CellState(i % 3));
+  }
+  check(shrunk == unshrunk);
 
   // Both file formats carry the cells over: .fot any map, .bt those within OctoMap's 65536³ cube.
   const std::string fot = io::encodeFot(t);

@@ -175,7 +175,31 @@ TEST_P(LogOddsMappingOnScans, OneScanRepeatedUntilItClampsEqualsOctoMap) {
   // Five misses or five hits reach a clamp: after three every cell carries a value, after seven none does.
   const FastOctTree three = oursOf(Sequence(3, once), 0.1, true, false);
   EXPECT_EQ(three.getUnsettledCount(), three.getFreeCount() + three.getOccupiedCount());
-  EXPECT_EQ(oursOf(scans, 0.1, true, false).getUnsettledCount(), 0u);
+  FastOctTree settled = oursOf(scans, 0.1, true, false);
+  EXPECT_EQ(settled.getUnsettledCount(), 0u);
+
+  // Settled, it is the binary map of the same cells, and after shrinkToFit it costs what that map costs.
+  FastOctTree binary(0.1);
+  insertRays(binary, once.sensor, once.xyz.data(), once.xyz.size() / 3, 12);
+  EXPECT_TRUE(settled == binary);
+  const std::size_t as_inserted = settled.getMemoryBytes();
+  settled.shrinkToFit();
+  binary.shrinkToFit();
+  EXPECT_EQ(settled.getMemoryBytes(), binary.getMemoryBytes());
+  EXPECT_LT(settled.getMemoryBytes(), as_inserted);
+
+  // Shrunk with blocks freed and leaves with values, a map takes further scans as if it had not been.
+  Scan moved = once;
+  moved.sensor[0] += 0.35f;  // the same points seen from elsewhere: settled cells get values again
+  FastOctTree mixed = oursOf({once, once, once, once, once, moved}, 0.1, true, false);
+  ASSERT_GT(mixed.getUnsettledCount(), 0u);
+  FastOctTree shrunk = mixed;
+  shrunk.shrinkToFit();
+  EXPECT_TRUE(shrunk == mixed);
+  EXPECT_LT(shrunk.getMemoryBytes(), mixed.getMemoryBytes());
+  for (FastOctTree* t : {&mixed, &shrunk})
+    insertRays(*t, once.sensor, moved.xyz.data(), moved.xyz.size() / 3, 12);
+  EXPECT_TRUE(shrunk == mixed);
 }
 
 TEST(LogOddsMapping, AnObjectThatMovesAwayIsFreedByEvidenceEqualsOctoMap) {

@@ -190,10 +190,45 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
 }
 
 void FastOctTree::shrinkToFit() {
+  compactPool();
+  if (value_leaves_ == 0) {  // no leaf names a palette entry
+    std::vector<float>().swap(palette_);
+    std::unordered_map<std::uint32_t, std::uint32_t>().swap(palette_of_);
+    palette_hits_ = {};
+  }
   words_.shrink_to_fit();
   value_of_.shrink_to_fit();
   float_blocks_.shrinkToFit();
   byte_blocks_.shrinkToFit();
+}
+
+void FastOctTree::compactPool() {
+  const std::uint32_t end = std::uint32_t(1 + live_blocks_);  // block 0 holds the root
+  if (free_blocks_ == 0) return;
+  std::vector<std::uint32_t> slots;  // the free blocks below `end`: as many as live blocks past it
+  for (std::uint32_t b = free_head_; b != kNoBlock; b = words_[std::size_t(b) * 8])
+    if (b < end) slots.push_back(b);
+  // Parents first: a block moved down takes its children's references along, which are then followed.
+  auto walk = [&](auto& self, std::size_t at) -> void {
+    if (node::isBitmap(words_[at])) return;
+    std::uint32_t b = node::block(words_[at]);
+    if (b >= end) {
+      const std::uint32_t to = slots.back();
+      slots.pop_back();
+      std::copy_n(words_.begin() + std::ptrdiff_t(b) * 8, 8, words_.begin() + std::ptrdiff_t(to) * 8);
+      if (!value_of_.empty())
+        std::copy_n(value_of_.begin() + std::ptrdiff_t(b) * 8, 8, value_of_.begin() + std::ptrdiff_t(to) * 8);
+      words_[at] = node::reference(to);
+      b = to;
+    }
+    for (unsigned o = 0; o < 8; ++o) self(self, std::size_t(b) * 8 + o);
+  };
+  walk(walk, 0);
+  words_.resize(std::size_t(end) * 8);
+  if (!value_of_.empty()) value_of_.resize(words_.size());
+  free_head_ = kNoBlock;
+  free_blocks_ = 0;
+  ++version_;
 }
 
 void FastOctTree::setMaxMemoryBytes(std::size_t bytes) {

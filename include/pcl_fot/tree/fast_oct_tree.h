@@ -193,8 +193,11 @@ class FastOctTree {
   std::size_t getMaxMemoryBytes() const { return max_bytes_; }
 
   /**
-   * Gives back the room the pool and the index of values keep for growth (they double as they grow). The
-   * next growth copies them; call it when a map is done, or between batches of scans.
+   * Gives back what the map does not use: the blocks freed when cells settled, folded or were erased (the
+   * live blocks move to the front of the pool), the room the pool and the index of values keep for growth
+   * (they double as they grow), and the palette once no leaf carries values, so a map whose cells have all
+   * settled costs what the binary map of the same cells costs. The next growth copies them; call it when a
+   * map is done, or between batches of scans.
    */
   void shrinkToFit();
 
@@ -276,6 +279,8 @@ class FastOctTree {
 
   /** Makes room for n more blocks, or throws before anything changes. */
   void reserveBlocks(std::size_t n);
+  /** Moves the live blocks into the free blocks below them, so that the pool ends at its last live block. */
+  void compactPool();
   std::uint32_t allocBlock();
   void freeBlock(std::uint32_t block);
 
