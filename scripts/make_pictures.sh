@@ -69,7 +69,7 @@ make_plots() {
   # Mapping speed: OctoMap's time over ours, per scan (ray-traced, Table III) and per sequence (log-odds).
   if table '## Ray-traced mapping' 'scan|OctoMap / FOT' >"$tmp/rays.tsv" &&
     table '## Multi-scan mapping' 'sequence|speed-up' >"$tmp/multi.tsv"; then
-    # The multi-scan section states its goal as "Goal: 25× OctoMap's speed".
+    # The multi-scan section states its goal as "Goal: 30× OctoMap's speed".
     goal=$(awk '/^## Multi-scan mapping/ { on = 1 } on && match($0, /Goal: [0-9.]+× OctoMap.s speed/) {
              print substr($0, RSTART + 6, RLENGTH - 6) + 0; exit }' "$bench")
     plot bench_octomap_speed.png octomap_speed.gp "$tmp/rays.tsv" "$tmp/multi.tsv" \

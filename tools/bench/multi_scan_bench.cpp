@@ -143,7 +143,7 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
          "Memory: OctoMap's `memoryUsage()` (its nodes, without malloc's overhead) and our "
          "`getMemoryBytes()` "
          "after `shrinkToFit()` (pool, free blocks included, value blocks and their index, the palette). "
-         "Goals: 30× OctoMap's speed on one thread, 1.7× that on two, and at most 1/5 of its memory.\n\n" +
+         "Goal: 30× OctoMap's speed on one thread, 1.7× that on two, and at most 1/5 of its memory.\n\n" +
          table.markdown();
 }
 
