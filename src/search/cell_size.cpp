@@ -47,13 +47,15 @@ Edge levelEdge(const std::vector<std::array<float, 3>>& sample, std::size_t fini
   // In Morton order, neighbours first differ at the level below which they share a cell.
   std::vector<std::uint64_t> codes;
   codes.reserve(sample.size());
+  // A level's edge only has to be about right: a point a rounding away from a cell's face may count in
+  // either cell.
+  const double per_cell = 1.0 / finest, last = double((1u << kLevels) - 1);
   for (const auto& p : sample) {
     if (p[0] < lo[0] || p[0] > hi[0] || p[1] < lo[1] || p[1] > hi[1] || p[2] < lo[2] || p[2] > hi[2])
       continue;
     std::uint32_t u[3];
-    for (int a = 0; a < 3; ++a)
-      u[a] =
-          std::uint32_t(std::min(std::floor((double(p[a]) - lo[a]) / finest), double((1u << kLevels) - 1)));
+    for (int a = 0; a < 3; ++a)  // truncation is floor here, the offsets being positive
+      u[a] = std::uint32_t(std::min((double(p[a]) - lo[a]) * per_cell, last));
     codes.push_back(morton3(u[0], u[1], u[2]));
   }
   if (codes.empty()) return {side, false};
@@ -114,10 +116,11 @@ void bulkBox(const std::vector<std::array<float, 3>>& sample, const double lo[3]
 }
 
 double chooseCellSize(const std::vector<std::array<float, 3>>& sample, std::size_t finite_count,
-                      const double lo[3], const double hi[3], const double bulk_lo[3],
-                      const double bulk_hi[3]) {
+                      const double lo[3], const double hi[3]) {
   Edge e = levelEdge(sample, finite_count, lo, hi);
   if (e.finest) {
+    double bulk_lo[3], bulk_hi[3];
+    bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
     const Edge bulk = levelEdge(sample, finite_count, bulk_lo, bulk_hi);
     if (bulk.edge > 0.0) e.edge = std::min(e.edge, bulk.edge);
   }

@@ -33,13 +33,12 @@ void bulkBox(const std::vector<std::array<float, 3>>& sample, const double lo[3]
  * The finest cell edge, of side / 2^l for l = 0..21 (side: the longest side of the points' bounding box
  * [lo, hi]), at which the points' occupied cells hold kPointsPerCell points on average; side itself if none
  * does; within [kFinestCell, kCoarsestCell]. When even side / 2^21 holds that many, stray points stretch the
- * box: the edges are then those of the bulk box [bulk_lo, bulk_hi], counting the points inside it. `sample`
+ * box: the edges are then those of the sample's bulk box (bulkBox), counting the points inside it. `sample`
  * holds `finite_count` finite points, or an even sample of them: then the cells are counted on the sample,
  * and the full count estimated as if every cell held the same number of points.
  */
 double chooseCellSize(const std::vector<std::array<float, 3>>& sample, std::size_t finite_count,
-                      const double lo[3], const double hi[3], const double bulk_lo[3],
-                      const double bulk_hi[3]);
+                      const double lo[3], const double hi[3]);
 
 /**
  * The edge for `points` points in `tree`'s occupied cells: the tree's edge times the smallest 2^k at which

@@ -8,8 +8,9 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <variant>
 
-#include <pcl_fot/detail/bits.h>
 #include <pcl_fot/tree/accessor.h>
 
 #include "search/cell_size.h"
@@ -22,44 +23,6 @@ namespace {
 
 bool finite3(const float* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-}
-
-/** Numbers the occupied cells in Morton order: each bitmap word gets the rank of its first one. */
-std::uint64_t assignRanks(const FastOctTree& tree, const NodeView& n, std::size_t offset, std::uint64_t next,
-                          std::vector<std::uint64_t>& ranks) {
-  if (n.isBitmap()) {
-    ranks[offset] = next;
-    return next + node::cellsIn(node::popcount(node::octantMask(n.word, CellState::Occupied)), n.level - 1);
-  }
-  for (unsigned o = 0; o < 8; ++o)
-    next = assignRanks(tree, n.child(tree.words(), o), n.childOffset(o), next, ranks);
-  return next;
-}
-
-using Box = std::array<float, 6>;  // low x, y, z, high x, y, z
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr Box kNoBox = {kInf, kInf, kInf, -kInf, -kInf, -kInf};
-
-void unite(Box& box, const Box& other) {
-  for (int a = 0; a < 3; ++a)
-    box[a] = std::min(box[a], other[a]), box[3 + a] = std::max(box[3 + a], other[3 + a]);
-}
-
-/** The box of the points under each node word, from their runs' boxes (by rank): words[offset]. */
-Box boxWords(const FastOctTree& tree, const NodeView& n, std::size_t offset,
-             const std::vector<std::uint64_t>& ranks, const std::vector<Box>& runs, std::vector<Box>& words) {
-  Box box = kNoBox;
-  if (n.isBitmap()) {
-    const std::uint64_t first = ranks[offset],
-                        count = node::cellsIn(node::popcount(node::octantMask(n.word, CellState::Occupied)),
-                                              n.level - 1);
-    for (std::uint64_t r = first; r < first + count; ++r) unite(box, runs[r]);
-  } else {
-    for (unsigned o = 0; o < 8; ++o)
-      unite(box, boxWords(tree, n.child(tree.words(), o), n.childOffset(o), ranks, runs, words));
-  }
-  words[offset] = box;
-  return box;
 }
 
 /** The key of the points' centre: tree coordinate 0x2AAAAAAA, halfway between level boundaries. */
@@ -99,6 +62,8 @@ class PointIndex::Input {
         size_(subset ? subset_size : count) {}
 
   std::size_t size() const { return size_; }
+  const float* data() const { return reinterpret_cast<const float*>(bytes_); }
+  std::size_t stride() const { return stride_; }
   const float* point(std::size_t i) const { return reinterpret_cast<const float*>(bytes_ + i * stride_); }
   /** The cloud index of input point j; -1 if it lies outside the cloud or is not finite. */
   std::int64_t source(std::size_t j) const {
@@ -113,11 +78,12 @@ class PointIndex::Input {
   std::size_t size_;
 };
 
-/** Where the finite points lie: their bounding box, and their bulk (see bulkBox) once it is needed. */
+/** Where the finite points lie: their bounding box, a sample and their bulk (see bulkBox) once needed. */
 struct PointIndex::Extent {
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   std::size_t finite = 0;
-  std::vector<std::array<float, 3>> sample;  // an even sample of the points, once the bulk is found
+  std::vector<std::array<float, 3>> sample;  // an even sample of the points, once taken
+  bool has_bulk = false;
   double bulk_lo[3] = {0, 0, 0}, bulk_hi[3] = {0, 0, 0};
 
   explicit Extent(const Input& in) {
@@ -131,7 +97,8 @@ struct PointIndex::Extent {
     }
   }
 
-  void findBulk(const Input& in) {
+  void takeSample(const Input& in) {
+    if (!sample.empty()) return;
     const std::size_t n = in.size(), m = std::min(n, detail::kCellSizeSample);
     sample.reserve(m);
     for (std::size_t s = 0; s < m; ++s) {
@@ -140,7 +107,13 @@ struct PointIndex::Extent {
       const float* p = in.point(std::size_t(i));
       sample.push_back({p[0], p[1], p[2]});
     }
+  }
+
+  void findBulk(const Input& in) {
+    if (has_bulk) return;
+    takeSample(in);
     detail::bulkBox(sample, lo, hi, bulk_lo, bulk_hi);
+    has_bulk = true;
   }
 };
 
@@ -155,9 +128,8 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
   const Input in(xyz, count, stride_bytes, subset, subset_size);
   Extent extent(in);
   if (extent.finite > 0 && automatic_) {
-    extent.findBulk(in);
-    resolution_ = detail::chooseCellSize(extent.sample, extent.finite, extent.lo, extent.hi, extent.bulk_lo,
-                                         extent.bulk_hi);
+    extent.takeSample(in);
+    resolution_ = detail::chooseCellSize(extent.sample, extent.finite, extent.lo, extent.hi);
   }
   Placement placed;
   placePoints(in, extent, placed);
@@ -169,49 +141,35 @@ void PointIndex::build(const float* xyz, std::size_t count, std::size_t stride_b
     resolution_ = detail::coarserCellSize(tree_, placed.keys.size());
     placePoints(in, extent, placed);
   }
-  updatable_ = false;
-  buckets_.clear();
-  ranks_.assign(tree_.poolWords(), 0);
-  const std::uint64_t cells = assignRanks(tree_, tree_.root(), 0, 0, ranks_);
-  fillTable(in, placed, cells);
-  boxRuns(cells);
-  word_box_.assign(tree_.poolWords(), kNoBox);
-  boxWords(tree_, tree_.root(), 0, ranks_, run_box_, word_box_);
-  splitCrowdedRuns(cells);
-  any_ = !index_.empty() ? index_.front() : -1;
+  std::vector<std::int32_t>& ids = placed.ids;
+  ids.insert(ids.end(), placed.outliers.begin(), placed.outliers.end());
+  detail::RankedTable table;
+  table.build(tree_, placed.keys, ids, in.data(), in.stride());
+  any_ = table.size() > 0 ? table.index(0) : -1;
+  storage_ = std::move(table);
   changed();
 }
 
 void PointIndex::changed() {
-  buckets_.settle();
+  if (auto* buckets = std::get_if<detail::CellBuckets>(&storage_)) buckets->settle();
   build_id_ = next_build_id++;
 }
 
 void PointIndex::makeUpdatable(std::int32_t offset, const std::int32_t* renumber) {
-  if (updatable_) return;
-  buckets_.clear();
-  ConstAccessor reader(tree_);
+  const auto* table = std::get_if<detail::RankedTable>(&storage_);
+  if (!table) return;
+  detail::CellBuckets buckets;
   const auto fill = [&](const Key& cell, std::uint32_t begin, std::uint32_t end) {
-    for (std::uint32_t i = begin; i < end; ++i)
-      buckets_.add(cell, &xyz_[3 * std::size_t(i)], renumber ? renumber[index_[i]] : index_[i] + offset);
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const std::int32_t index = table->index(i);
+      buckets.add(cell, table->points() + 3 * std::size_t(i), renumber ? renumber[index] : index + offset);
+    }
   };
-  tree_.forEachCell(CellState::Occupied, [&](const Key& cell) {
-    const std::uint32_t rank = cellRank(reader, cell);
-    fill(cell, start_[rank], start_[rank + 1]);
-  });
-  if (!start_.empty()) fill(kOutliers, start_[start_.size() - 2], start_.back());
-  buckets_.settle();
-  updatable_ = true;
-  any_ = index_.empty() ? -1 : renumber ? renumber[index_.front()] : index_.front() + offset;
-  std::vector<std::uint64_t>().swap(ranks_);
-  std::vector<std::uint32_t>().swap(start_);
-  std::vector<float>().swap(xyz_);
-  std::vector<std::int32_t>().swap(index_);
-  std::vector<std::array<float, 6>>().swap(run_box_);
-  std::vector<std::array<float, 6>>().swap(word_box_);
-  std::vector<detail::PointBox>().swap(crowd_);
-  crowd_root_.clear();
-  crowd_root_.shrink_to_fit();
+  table->forEachRun(tree_, fill);
+  if (table->size() > 0) fill(kOutliers, table->begin(table->outlierRun()), table->end(table->outlierRun()));
+  buckets.settle();
+  any_ = table->size() == 0 ? -1 : renumber ? renumber[table->index(0)] : table->index(0) + offset;
+  storage_ = std::move(buckets);
 }
 
 std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t stride_bytes,
@@ -243,7 +201,7 @@ std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t str
     if (!finite3(point(i))) continue;
     ++finite;
     if (indices[i] < 0) continue;
-    if (buckets_.contains(indices[i]))
+    if (buckets().contains(indices[i]))
       throw std::invalid_argument("pcl::fot::PointIndex::add: index " + std::to_string(indices[i]) +
                                   " is held already");
     if (taking++ == 0) first_taken = indices[i];
@@ -283,8 +241,8 @@ std::size_t PointIndex::add(const float* xyz, std::size_t count, std::size_t str
     const float* p = point(i);
     Key key;
     if (!grid.pointToKey(p[0], p[1], p[2], key)) {
-      buckets_.add(kOutliers, p, indices[i]);
-    } else if (buckets_.add(key, p, indices[i])) {
+      buckets().add(kOutliers, p, indices[i]);
+    } else if (buckets().add(key, p, indices[i])) {
       writer.setValidCell(key, CellState::Occupied);
     }
   }
@@ -308,7 +266,7 @@ void PointIndex::refitGrid() {
   std::vector<std::int32_t> ids;
   xyz.reserve(3 * size());
   ids.reserve(size());
-  buckets_.forEachPoint([&](const detail::BucketPoint& p) {
+  buckets().forEachPoint([&](const detail::BucketPoint& p) {
     xyz.insert(xyz.end(), p.p, p.p + 3);
     ids.push_back(p.index);
   });
@@ -324,16 +282,16 @@ std::size_t PointIndex::remove(const std::int32_t* indices, std::size_t count,
   for (std::size_t i = 0; i < count; ++i) {
     Key cell;
     bool emptied;
-    if (!buckets_.remove(indices[i], cell, emptied)) continue;
+    if (!buckets().remove(indices[i], cell, emptied)) continue;
     ++removed;
     if (removed_indices) removed_indices->push_back(indices[i]);
     if (emptied && cell != kOutliers) writer.setValidCell(cell, CellState::Unknown);
   }
   if (removed > 0) {
     refitGrid();
-    if (!buckets_.contains(any_)) {
+    if (!buckets().contains(any_)) {
       any_ = -1;
-      buckets_.forEachPoint([&](const detail::BucketPoint& p) { any_ = p.index; });
+      buckets().forEachPoint([&](const detail::BucketPoint& p) { any_ = p.index; });
     }
     changed();
   }
@@ -357,7 +315,7 @@ std::size_t PointIndex::removeBox(const float lo[3], const float hi[3], bool ins
   const auto take = [&](const Key& cell) {
     std::uint32_t count = 0;
     const detail::PointBox* boxes;
-    const detail::BucketPoint* points = buckets_.find(cell, count, boxes);
+    const detail::BucketPoint* points = buckets().find(cell, count, boxes);
     if (count == 0) return;
     const std::int64_t k[3] = {cell.x, cell.y, cell.z};
     bool within = false, beyond = false;  // the outliers have no cell: each point is read
@@ -408,7 +366,7 @@ void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed)
     const double reach = 2.0 * double(kMaxKey - kCentreKey) * resolution_;
     const bool fits = extent.hi[0] - extent.lo[0] <= reach && extent.hi[1] - extent.lo[1] <= reach &&
                       extent.hi[2] - extent.lo[2] <= reach;
-    if (!fits && extent.sample.empty()) extent.findBulk(in);
+    if (!fits) extent.findBulk(in);
     for (int a = 0; a < 3; ++a) {
       const double centre =
           0.5 * (fits ? extent.lo[a] + extent.hi[a] : extent.bulk_lo[a] + extent.bulk_hi[a]);
@@ -441,73 +399,6 @@ void PointIndex::placePoints(const Input& in, Extent& extent, Placement& placed)
   }
 }
 
-std::uint32_t PointIndex::cellRank(ConstAccessor& reader, const Key& k) const {
-  const unsigned level = reader.locatePath(k);
-  const std::size_t offset = reader.pathOffset(level);
-  const TreeCoord u(k);
-  const unsigned o = u.octant(level);
-  const std::uint32_t before =
-      node::octantMask(tree_.words()[offset], CellState::Occupied) & ((1u << o) - 1u);
-  const std::uint32_t inner = tree_coord::lowMask(level - 1);
-  return std::uint32_t(ranks_[offset] + node::cellsIn(node::popcount(before), level - 1) +
-                       detail::morton3(u[0] & inner, u[1] & inner, u[2] & inner));
-}
-
-void PointIndex::fillTable(const Input& in, Placement& placed, std::uint64_t cells) {
-  // Each point's cell rank, then a counting sort into the table. The outliers come last, as one more run.
-  std::vector<std::uint32_t> rank_of(placed.keys.size());
-  ConstAccessor reader(tree_);
-  for (std::size_t j = 0; j < placed.keys.size(); ++j) rank_of[j] = cellRank(reader, placed.keys[j]);
-  std::vector<std::int32_t>& ids = placed.ids;
-  ids.insert(ids.end(), placed.outliers.begin(), placed.outliers.end());
-  rank_of.resize(ids.size(), std::uint32_t(cells));
-  start_.assign(std::size_t(cells) + 2, 0);
-  for (std::uint32_t r : rank_of) ++start_[r + 1];
-  for (std::size_t c = 0; c <= cells; ++c) start_[c + 1] += start_[c];
-  xyz_.resize(3 * ids.size());
-  index_.resize(ids.size());
-  std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-  for (std::size_t j = 0; j < ids.size(); ++j) {
-    const std::uint32_t at = fill[rank_of[j]]++;
-    const float* p = in.point(std::size_t(ids[j]));
-    std::copy(p, p + 3, &xyz_[3 * std::size_t(at)]);
-    index_[at] = ids[j];
-  }
-}
-
-void PointIndex::boxRuns(std::uint64_t cells) {
-  run_box_.resize(std::size_t(cells) + 1);
-  for (std::size_t c = 0; c <= cells; ++c) {
-    Box& box = run_box_[c];
-    box = kNoBox;
-    for (std::uint32_t i = start_[c]; i < start_[c + 1]; ++i)
-      for (int a = 0; a < 3; ++a) {
-        box[a] = std::min(box[a], xyz_[3 * std::size_t(i) + a]);
-        box[3 + a] = std::max(box[3 + a], xyz_[3 * std::size_t(i) + a]);
-      }
-  }
-}
-
-void PointIndex::splitCrowdedRuns(std::uint64_t cells) {
-  crowd_.clear();
-  crowd_root_.clear();
-  std::vector<detail::BucketPoint> run;
-  for (std::size_t c = 0; c <= cells; ++c) {
-    const std::uint32_t begin = start_[c], end = start_[c + 1];
-    if (end - begin <= detail::kCrowded) continue;
-    run.resize(end - begin);
-    for (std::uint32_t i = begin; i < end; ++i)
-      run[i - begin] = {
-          {xyz_[3 * std::size_t(i)], xyz_[3 * std::size_t(i) + 1], xyz_[3 * std::size_t(i) + 2]}, index_[i]};
-    crowd_root_.emplace_back(std::uint32_t(c), std::uint32_t(crowd_.size()));
-    detail::splitIntoBoxes(run.data(), end - begin, begin, crowd_);
-    for (std::uint32_t i = begin; i < end; ++i) {
-      std::copy(run[i - begin].p, run[i - begin].p + 3, &xyz_[3 * std::size_t(i)]);
-      index_[i] = run[i - begin].index;
-    }
-  }
-}
-
 std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Metric metric,
                                std::vector<std::int32_t>& indices, std::vector<float>& distances) const {
   indices.clear();
@@ -527,7 +418,7 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
 
   // The walk starts in the query's cell; any nearby cell would give the same, exact, answer, so the cell
   // comes from the reciprocal, clamped for far queries, rather than from pointToKey's exact division. The
-  // boxes' gaps allow for the difference (Policy's slack).
+  // boxes' gaps allow for the difference (PointPolicy's slack).
   const CellGrid& grid = tree_.getGrid();
   const double inverse = 1.0 / grid.resolution();
   double qc[3];
@@ -541,30 +432,38 @@ std::size_t PointIndex::search(const float q[3], std::size_t k, double bound, Me
   thread_local std::uint32_t last_slot = kNoSlot;  // this thread's previous nearest point on this build
   if (accessor_fresh) last_slot = kNoSlot;
   results.clear();
-  const std::size_t keep = k >= size() ? Policy::kAll : k;  // all of them: no insertion in order needed
-  Policy policy(*this, q, qc, metric, keep, bound, results);
-  // Queries in spatial order have nearby answers: the previous one bounds the walk from the start. Offering
-  // a point twice is harmless for one neighbour (the repeat does not beat itself).
-  if (updatable_) {
-    if (keep == 1 && buckets_.contains(std::int32_t(last_slot))) {
-      const detail::BucketPoint& p = buckets_.point(std::int32_t(last_slot));
-      policy.offer(p.p, p.index, last_slot);
-    }
-    // Most queries fall among the points: their own cell, found by its key, often holds the whole answer,
-    // and then the walk is not needed. The cell's box proves it (Policy::settled).
-    if (!policy.visitOwnCell(key) && tree_.getOccupiedCount() > 0)
-      detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, nullptr, policy).run(*accessor, key);
-    policy.visitBucket(kOutliers);
-  } else {
-    if (keep == 1 && last_slot != kNoSlot)
-      policy.offer(&xyz_[3 * std::size_t(last_slot)], index_[last_slot], last_slot);
-    const std::size_t outliers = start_.size() - 2;  // the rank of the run after the cells'
-    if (start_[outliers] > 0)
-      detail::NeighbourWalk<Policy>(tree_, CellState::Occupied, ranks_.data(), policy).run(*accessor, key);
-    if (start_[outliers + 1] > start_[outliers]) policy.visitCell(TreeCoord(), outliers);
-  }
+  const std::size_t keep = k >= size() ? detail::kAllPoints : k;  // all of them: no insertion in order needed
+  std::visit(
+      [&](const auto& storage) {
+        using Storage = std::decay_t<decltype(storage)>;
+        detail::PointPolicy<Storage> policy(storage, grid.resolution(), q, qc, metric, keep, bound, results);
+        // Queries in spatial order have nearby answers: the previous one bounds the walk from the start.
+        // Offering a point twice is harmless for one neighbour (the repeat does not beat itself).
+        if constexpr (std::is_same_v<Storage, detail::CellBuckets>) {
+          if (keep == 1 && storage.contains(std::int32_t(last_slot))) {
+            const detail::BucketPoint& p = storage.point(std::int32_t(last_slot));
+            policy.offer(p.p, p.index, last_slot);
+          }
+          // Most queries fall among the points: their own cell, found by its key, often holds the whole
+          // answer, and then the walk is not needed. The cell's box proves it (PointPolicy::settled).
+          if (!policy.visitOwnCell(key) && tree_.getOccupiedCount() > 0)
+            detail::NeighbourWalk<detail::PointPolicy<Storage>>(tree_, CellState::Occupied, nullptr, policy)
+                .run(*accessor, key);
+          policy.visitBucket(kOutliers);
+        } else {
+          if (keep == 1 && last_slot != kNoSlot)
+            policy.offer(storage.points() + 3 * std::size_t(last_slot), storage.index(last_slot), last_slot);
+          const std::uint64_t outliers = storage.outlierRun();
+          if (storage.begin(outliers) > 0)
+            detail::NeighbourWalk<detail::PointPolicy<Storage>>(tree_, CellState::Occupied, storage.ranks(),
+                                                                policy)
+                .run(*accessor, key);
+          if (storage.end(outliers) > storage.begin(outliers)) policy.visitCell(TreeCoord(), outliers);
+        }
+      },
+      storage_);
 
-  if (keep == Policy::kAll || keep > Policy::kLargeK) std::sort(results.begin(), results.end());
+  if (keep == detail::kAllPoints || keep > detail::kLargeK) std::sort(results.begin(), results.end());
   if (k == 1 && !results.empty()) last_slot = results.front().slot;
   indices.reserve(results.size());
   distances.reserve(results.size());
@@ -589,16 +488,12 @@ std::size_t PointIndex::radiusSearch(const float q[3], double radius, Metric met
     return 0;
   }
   const double limit = metric != Metric::Manhattan ? radius * radius : radius;
-  return search(q, max_results ? max_results : Policy::kAll, limit, metric, indices, distances);
+  return search(q, max_results ? max_results : detail::kAllPoints, limit, metric, indices, distances);
 }
 
 std::size_t PointIndex::getMemoryBytes() const {
-  return sizeof(*this) + tree_.getMemoryBytes() + ranks_.capacity() * sizeof(std::uint64_t) +
-         start_.capacity() * sizeof(std::uint32_t) + xyz_.capacity() * sizeof(float) +
-         index_.capacity() * sizeof(std::int32_t) +
-         (run_box_.capacity() + word_box_.capacity()) * sizeof(run_box_[0]) +
-         crowd_.capacity() * sizeof(detail::PointBox) + crowd_root_.capacity() * sizeof(crowd_root_[0]) +
-         buckets_.memoryBytes();
+  return sizeof(*this) + tree_.getMemoryBytes() +
+         std::visit([](const auto& storage) { return storage.memoryBytes(); }, storage_);
 }
 
 }  // namespace fot

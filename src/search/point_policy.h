@@ -1,6 +1,6 @@
 #pragma once
 // PointIndex's query policy: the distances from one query point to the points of the cells the tree walk
-// (NeighbourWalk) visits, in the ranked table or in the buckets. Included by point_index.cpp only.
+// (NeighbourWalk) visits, in either of its storages. Included by point_index.cpp only.
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,8 @@
 #include <type_traits>
 #include <vector>
 
-#include <pcl_fot/search/point_index.h>
+#include <pcl_fot/search/cell_buckets.h>
+#include <pcl_fot/search/ranked_table.h>
 
 #include "search/neighbour_walk.h"
 
@@ -57,28 +58,39 @@ inline float boxDistance(Metric metric, const float* lo, const float* hi, const 
   return pointDistance(metric, gap, kOrigin);
 }
 
-}  // namespace detail
+/** k for every point within the bound. */
+constexpr std::size_t kAllPoints = std::numeric_limits<std::size_t>::max();
+/**
+ * Beyond this k, insertion in order, O(k) a point, costs more than a heap's O(log k) and a sort at the end:
+ * callgrind put the crossover at k = 70 to 80 on a Kinect frame and a room scan.
+ */
+constexpr std::size_t kLargeK = 80;
 
-/** Distances from one query point, in metres, to the points of the cells the walk visits. */
-class PointIndex::Policy {
+/**
+ * Distances from one query point, in metres, to the points of the cells the walk visits, as NeighbourWalk's
+ * Policy. Storage is RankedTable (cells found by rank) or CellBuckets (cells found by key).
+ */
+template <typename Storage>
+class PointPolicy {
+  static constexpr bool kBuckets = std::is_same_v<Storage, CellBuckets>;
+
  public:
   using Distance = double;
 
-  /** `qc`: the query in cells from the grid origin, where boxes are measured; one scale turns them into
-   * metres. */
-  Policy(const PointIndex& index, const float q[3], const double qc[3], Metric metric, std::size_t k,
-         double limit, std::vector<detail::PointHit>& results)
-      : index_(index),
+  /** `qc`: the query in cells of edge `resolution` from the grid origin, where boxes are measured; one
+   * scale turns them into metres. */
+  PointPolicy(const Storage& storage, double resolution, const float q[3], const double qc[3], Metric metric,
+              std::size_t k, double limit, std::vector<PointHit>& results)
+      : storage_(storage),
         q_{q[0], q[1], q[2]},
         metric_(metric),
         k_(k),
         limit_(limit),
         bound_(limit),
         results_(results) {
-    const double res = index.tree_.getGrid().resolution();
-    scale_ = metric != Metric::Manhattan ? res * res : res;
+    scale_ = metric != Metric::Manhattan ? resolution * resolution : resolution;
     const double slack =
-        0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / res;
+        0x1p-48 * std::max({std::abs(qc[0]), std::abs(qc[1]), std::abs(qc[2])}) + 1e-22 / resolution;
     for (int a = 0; a < 3; ++a) low_[a] = qc[a] - slack, high_[a] = qc[a] + slack;
   }
 
@@ -109,34 +121,36 @@ class PointIndex::Policy {
   }
 
   bool worthVisiting(Distance lower_bound) const { return lower_bound <= bound_; }
-  /** The box of the node's points bounds them tighter than the node's cube: queries far away prune more. */
+  /** A table's box of a node's points bounds them tighter than the node's cube: far queries prune more. */
   bool mayImprove(Distance, const TreeCoord&, unsigned, std::size_t word) const {
-    if (word == detail::kNoWord || index_.word_box_.empty()) return true;
-    const float* box = index_.word_box_[word].data();
-    const float d = detail::boxDistance(metric_, box, box + 3, q_);
-    return !(double(d) > bound_);
+    if constexpr (kBuckets) {
+      return true;
+    } else {
+      if (word == kNoWord) return true;
+      const float* box = storage_.wordBox(word).data();
+      return !(double(pcl::fot::detail::boxDistance(metric_, box, box + 3, q_)) > bound_);
+    }
   }
   bool settled(const TreeCoord& lo, unsigned level) const { return bound_ < exterior(lo, level); }
   bool wholeRegions() const { return false; }
   void visitRegion(const TreeCoord&, unsigned, std::uint64_t) {}
 
   /**
-   * A cell's points, or the outliers' (the run after the last cell). A crowded run is split into boxes (see
-   * build), visited nearer first and skipped when beyond the bound.
+   * A cell's points, or in a table the outliers' (the run after the last cell). A crowded cell's points are
+   * split into boxes, visited nearer first and skipped when beyond the bound.
    */
   void visitCell(const TreeCoord& cell, std::uint64_t rank) {
-    if (index_.updatable_) {
+    if constexpr (kBuckets) {
       const Key key{tree_coord::toKey(cell[0]), tree_coord::toKey(cell[1]), tree_coord::toKey(cell[2])};
       if (!(visited_first_ && key == first_)) visitBucket(key);
-      return;
+    } else {
+      withMetric([&](auto metric) { scanRun<decltype(metric)::value>(rank); });
     }
-    const std::uint32_t begin = index_.start_[rank], end = index_.start_[rank + 1];
-    withMetric([&](auto metric) { scanRun<decltype(metric)::value>(rank, begin, end); });
   }
 
   /**
-   * The query's own cell in an updated index, before any walk: found by its key, and left out of the walk
-   * that may follow. Returns true if the answer is then complete: nothing outside the cell can improve it.
+   * The query's own cell in the buckets, before any walk: found by its key, and left out of the walk that
+   * may follow. Returns true if the answer is then complete: nothing outside the cell can improve it.
    */
   bool visitOwnCell(const Key& cell) {
     visitBucket(cell);
@@ -145,24 +159,16 @@ class PointIndex::Policy {
     return settled(TreeCoord(cell), 0);
   }
 
-  /** The points of a cell (or the outliers) in an updated index. */
+  /** The points of a bucket (a cell's, or the outliers'). */
   void visitBucket(const Key& cell) {
     std::uint32_t n;
-    const detail::PointBox* boxes;
-    const detail::BucketPoint* points = index_.buckets_.find(cell, n, boxes);
+    const PointBox* boxes;
+    const BucketPoint* points = storage_.find(cell, n, boxes);
     withMetric([&](auto metric) { scanBucket<decltype(metric)::value>(points, n, boxes); });
   }
 
-  /** k for every point within the bound. */
-  static constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
-  /**
-   * Beyond this k, insertion in order, O(k) a point, costs more than a heap's O(log k) and a sort at the end:
-   * callgrind put the crossover at k = 70 to 80 on a Kinect frame and a room scan.
-   */
-  static constexpr std::size_t kLargeK = 80;
-
   void offer(const float* p, std::int32_t index, std::uint32_t slot) {
-    const detail::PointHit h{detail::pointDistance(metric_, p, q_), index, slot};
+    const PointHit h{pointDistance(metric_, p, q_), index, slot};
     if (double(h.distance) <= bound_) keep(h);
   }
 
@@ -180,21 +186,24 @@ class PointIndex::Policy {
     }
   }
 
+  /** A run of the table: its points, or its boxes if it is crowded; each point's slot is its place. */
   template <Metric M>
-  void scanRun(std::uint64_t rank, std::uint32_t begin, std::uint32_t end) {
-    const float* xyz = index_.xyz_.data();
-    if (end - begin <= detail::kCrowded) {
+  void scanRun(std::uint64_t rank) {
+    const std::uint32_t begin = storage_.begin(rank), end = storage_.end(rank);
+    const float* xyz = storage_.points();
+    const auto scan = [&](std::uint32_t first, std::uint32_t last) {
+      for (std::uint32_t i = first; i < last; ++i) {
+        const float d = pointDistance(M, &xyz[3 * std::size_t(i)], q_);
+        if (double(d) <= bound_) keep(PointHit{d, storage_.index(i), i});
+      }
+    };
+    if (end - begin <= kCrowded) {
       // The points' own box bounds them tighter than the cell's.
-      const float* box = index_.run_box_[rank].data();
-      if (double(boxDistance<M>(box, box + 3)) > bound_) return;
-      for (std::uint32_t i = begin; i < end; ++i) consider<M>(xyz, i);
+      const float* box = storage_.runBox(rank).data();
+      if (double(boxDistance<M>(box, box + 3)) <= bound_) scan(begin, end);
       return;
     }
-    const auto& roots = index_.crowd_root_;
-    const auto root = std::lower_bound(roots.begin(), roots.end(), std::make_pair(std::uint32_t(rank), 0u));
-    scanBoxes<M>(index_.crowd_.data(), root->second, [&](std::uint32_t first, std::uint32_t last) {
-      for (std::uint32_t i = first; i < last; ++i) consider<M>(xyz, i);
-    });
+    scanBoxes<M>(storage_.crowd(), storage_.crowdRoot(rank), scan);
   }
 
   /**
@@ -202,11 +211,11 @@ class PointIndex::Policy {
    * its index. Holes have NaN coordinates, which no bound takes.
    */
   template <Metric M>
-  void scanBucket(const detail::BucketPoint* points, std::uint32_t n, const detail::PointBox* boxes) {
+  void scanBucket(const BucketPoint* points, std::uint32_t n, const PointBox* boxes) {
     const auto scan = [&](std::uint32_t first, std::uint32_t last) {
       for (std::uint32_t i = first; i < last; ++i) {
-        const float d = detail::pointDistance(M, points[i].p, q_);
-        if (double(d) <= bound_) keep(detail::PointHit{d, points[i].index, std::uint32_t(points[i].index)});
+        const float d = pointDistance(M, points[i].p, q_);
+        if (double(d) <= bound_) keep(PointHit{d, points[i].index, std::uint32_t(points[i].index)});
       }
     };
     std::uint32_t tail = 0;  // the points after the boxed ones
@@ -222,12 +231,12 @@ class PointIndex::Policy {
    * bound. scan(begin, end) reads a leaf's points.
    */
   template <Metric M, typename Scan>
-  void scanBoxes(const detail::PointBox* nodes, std::uint32_t node, Scan&& scan) {
+  void scanBoxes(const PointBox* nodes, std::uint32_t node, Scan&& scan) {
     std::uint32_t pending[64];  // one per level at most: the farther halves, with their distances
     float pending_distance[64];
     int top = 0;
     for (;;) {
-      const detail::PointBox& box = nodes[node];
+      const PointBox& box = nodes[node];
       if (box.right == 0) {
         scan(box.begin, box.end);
       } else {
@@ -251,31 +260,24 @@ class PointIndex::Policy {
    * have a smaller index, so a pile of equal points (sensors that write (0, 0, 0) for no return) is not
    * scanned whole: its halves split by index.
    */
-  bool mayHold(float distance, const detail::PointBox& box) const {
+  bool mayHold(float distance, const PointBox& box) const {
     if (double(distance) != bound_) return double(distance) < bound_;
     return results_.size() < k_ || box.least_index < worst().index;
   }
 
   /** The k-th best kept, once there are k. */
-  const detail::PointHit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
+  const PointHit& worst() const { return k_ > kLargeK ? results_.front() : results_.back(); }
 
   /**
    * The least distance PCL could report from this query for a point in the box (see the free boxDistance).
    */
   template <Metric M>
-  float boxDistance(const detail::PointBox& box) const {
+  float boxDistance(const PointBox& box) const {
     return boxDistance<M>(box.lo, box.hi);
   }
   template <Metric M>
   float boxDistance(const float* lo, const float* hi) const {
-    return detail::boxDistance(M, lo, hi, q_);
-  }
-
-  /** The distance PCL would report for the point in slot i, kept if it is within the bound. */
-  template <Metric M>
-  void consider(const float* xyz, std::uint32_t i) {
-    const float d = detail::pointDistance(M, &xyz[3 * std::size_t(i)], q_);
-    if (double(d) <= bound_) keep(detail::PointHit{d, index_.index_[i], i});
+    return pcl::fot::detail::boxDistance(M, lo, hi, q_);
   }
 
   /**
@@ -284,8 +286,8 @@ class PointIndex::Policy {
    * keeps them in a heap, sorted at the end, and so do radius searches without max_nn, which keep every
    * point.
    */
-  void keep(const detail::PointHit& h) {
-    if (k_ == kAll) {
+  void keep(const PointHit& h) {
+    if (k_ == kAllPoints) {
       results_.push_back(h);
       return;
     }
@@ -305,7 +307,7 @@ class PointIndex::Policy {
   }
 
   /** The k best in a max-heap: the k-th best on top. */
-  void keepInHeap(const detail::PointHit& h) {
+  void keepInHeap(const PointHit& h) {
     if (results_.size() == k_) {
       if (!(h < results_.front())) return;
       std::pop_heap(results_.begin(), results_.end());
@@ -319,7 +321,7 @@ class PointIndex::Policy {
 
   static double shade(double d) { return d * (1.0 - 4e-6); }
 
-  const PointIndex& index_;
+  const Storage& storage_;
   float q_[3];
   double low_[3], high_[3];  // the query in cells from the grid origin, widened by its rounding
   double scale_;             // cell units to the metric's units
@@ -327,10 +329,11 @@ class PointIndex::Policy {
   std::size_t k_;
   double limit_;
   double bound_;  // what a point must not exceed: the k-th best so far, else the limit
-  std::vector<detail::PointHit>& results_;
+  std::vector<PointHit>& results_;
   bool visited_first_ = false;  // visitOwnCell() read the cell first_
   Key first_;
 };
 
+}  // namespace detail
 }  // namespace fot
 }  // namespace pcl

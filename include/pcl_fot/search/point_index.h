@@ -1,13 +1,13 @@
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
-#include <utility>
+#include <variant>
 #include <vector>
 
 #include <pcl_fot/search/cell_buckets.h>
 #include <pcl_fot/search/nearest_cell_search.h>
+#include <pcl_fot/search/ranked_table.h>
 #include <pcl_fot/tree/accessor.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
@@ -15,19 +15,21 @@ namespace pcl {
 namespace fot {
 
 /**
- * Exact nearest-neighbour queries on a point set: a FastOctTree of the points' cells, plus a compact table
- * from each occupied cell to its points. The tree walk (see NeighbourWalk) visits cells nearest first and
- * prunes by cell boxes; the table lists each cell's points contiguously, found by the cell's rank in the
- * tree's Morton order. A crowded cell's points are split further into boxes of the points themselves.
+ * Exact nearest-neighbour queries on a point set: a FastOctTree of the points' cells, plus a storage of
+ * each occupied cell's points. The tree walk (see NeighbourWalk) visits cells nearest first and prunes by
+ * cell boxes; a build stores the points in a compact table (detail::RankedTable), each cell's points
+ * contiguous, found by the cell's rank in the tree's Morton order. A crowded cell's points are split further
+ * into boxes of the points themselves.
  *
  * Distances are those PCL's searches report: squared Euclidean, (dx² + dy²) + dz² in float, or Manhattan,
  * (|dx| + |dy|) + |dz|. Results are exact, nearest first, and ties go to the smaller point index.
  * Const queries are safe from many threads at once; each thread reuses its own path from query to query.
  *
  * The index updates in place: add, remove and removeBox. The first update turns the table into one bucket
- * of points per cell, which later updates change point by point (detail::CellBuckets); build makes it
- * static again. Results after any updates equal those of a fresh build of the points held. An update
- * needs the index alone: no query may run during one.
+ * of points per cell, which later updates change point by point (detail::CellBuckets); build makes it a
+ * table again. Queries read either storage through the same policy (point_policy.h). Results after any
+ * updates equal those of a fresh build of the points held. An update needs the index alone: no query may run
+ * during one.
  */
 class PointIndex {
  public:
@@ -78,7 +80,9 @@ class PointIndex {
                         std::vector<std::int32_t>* removed = nullptr);
 
   /** Points indexed: the finite ones of those given to build, then added and not removed. */
-  std::size_t size() const { return updatable_ ? buckets_.size() : index_.size(); }
+  std::size_t size() const {
+    return std::visit([](const auto& storage) { return storage.size(); }, storage_);
+  }
   /** The index, as given, of one point indexed; -1 if none is. */
   std::int32_t anyPoint() const { return any_; }
   /** The cell edge: the one given, or the one the last build picked (0.01 m before the first). */
@@ -103,25 +107,18 @@ class PointIndex {
   std::size_t getMemoryBytes() const;
 
  private:
-  class Policy;
   class Input;
   struct Extent;
   struct Placement;
   /** Builds the tree of the points' cells, its grid centred on them (or on their bulk). */
   void placePoints(const Input& in, Extent& extent, Placement& placed);
-  /** The rank of the occupied cell `k` in the tree's Morton order. */
-  std::uint32_t cellRank(ConstAccessor& reader, const Key& k) const;
-  /** Lists each cell's points contiguously, by rank, the outliers last. */
-  void fillTable(const Input& in, Placement& placed, std::uint64_t cells);
-  /** The bounding box of each run's points (run_box_). */
-  void boxRuns(std::uint64_t cells);
-  /** Splits the runs of more than detail::kCrowded points into boxes (crowd_). */
-  void splitCrowdedRuns(std::uint64_t cells);
   /**
    * Moves the points into buckets, for the updates, their indices raised by `offset`, or each index i
    * replaced by renumber[i].
    */
   void makeUpdatable(std::int32_t offset, const std::int32_t* renumber = nullptr);
+  /** The buckets, once makeUpdatable has made them. */
+  detail::CellBuckets& buckets() { return std::get<detail::CellBuckets>(storage_); }
   /** An automatic index whose cells hold far more or fewer points than it picks them for is built anew. */
   void refitGrid();
   /** Marks a change: the changed crowded buckets are split anew, and each thread's cached path and previous
@@ -133,22 +130,10 @@ class PointIndex {
   bool automatic_;
   double resolution_;
   FastOctTree tree_;
-  std::uint64_t build_id_ = 0;        // tells each thread's cached path which build it belongs to
-  std::vector<std::uint64_t> ranks_;  // per pool word: rank of the first occupied cell under a bitmap word
-  // Cell rank -> first of its points in xyz_ / index_. One more run follows the cells': the outliers,
-  // finite points beyond the key range, which every search scans (as a crowded cell).
-  std::vector<std::uint32_t> start_;
-  std::vector<float> xyz_;                      // the points, grouped by cell
-  std::vector<std::int32_t> index_;             // their indices as given to build
-  std::vector<std::array<float, 6>> run_box_;   // by rank: the box (low x, y, z, high x, y, z) of its points
-  std::vector<std::array<float, 6>> word_box_;  // by pool word: the box of the points under it
-  // Crowded runs, too many points to scan whole, are split into boxes (positions in xyz_ / index_), in
-  // pre-order: crowd_root_ holds each one's cell rank and first box, by rank.
-  std::vector<detail::PointBox> crowd_;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> crowd_root_;
-  // Once updated: each cell's points, the outliers under a key no cell has; the table above is then empty.
-  bool updatable_ = false;
-  detail::CellBuckets buckets_;
+  std::uint64_t build_id_ = 0;  // tells each thread's cached path which build it belongs to
+  // The points of the tree's cells: ranked runs from a build, buckets once updated. Both keep the outliers,
+  // finite points beyond the key range, which every search scans.
+  std::variant<detail::RankedTable, detail::CellBuckets> storage_;
   std::int32_t any_ = -1;  // anyPoint()
 };
 
