@@ -859,12 +859,26 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::walkRay(const E
   const CellGrid box_grid(resolution_);  // PCL's frame: keys counted from the box's lower corner
   RayWalker walker(box_grid, Key{start[0], start[1], start[2]}, rel, dir);
   ConstAccessor cells_of(tree_);
-  for (std::int64_t budget = 3 * cells + 3; budget > 0; --budget) {
+  const NodeWord* words = tree_.words();
+  for (std::int64_t budget = 3 * cells + 3; budget > 0;) {
     const Key k = walker.key();
     if (k.x < 0 || k.y < 0 || k.z < 0 || k.x >= cells || k.y >= cells || k.z >= cells) break;
     const octree::OctreeKey pk(uindex_t(k.x), uindex_t(k.y), uindex_t(k.z));
-    if (cells_of.getCell(pclKeyToTreeKey(pk)) == CellState::Occupied && !visit(pk)) break;
-    walker.step();
+    const Key key = pclKeyToTreeKey(pk);
+    const unsigned level = cells_of.locatePath(key);  // 0: outside the tree's root, where nothing is
+    const TreeCoord c(key);
+    const bool occupied =
+        level > 0 && node::state(words[cells_of.pathOffset(level)], c.octant(level)) == CellState::Occupied;
+    if (occupied && !visit(pk)) break;
+    // An empty octant, 2^(level-1) cells per axis, is crossed without reading the tree again: the same
+    // steps, so the same cells afterwards.
+    const unsigned span = occupied || level == 0 ? 0 : level - 1;
+    for (bool inside = true; inside && budget > 0; --budget) {
+      walker.step();
+      const Key w = walker.key();
+      const TreeCoord n(Key{w.x + offset_[0], w.y + offset_[1], w.z + offset_[2]});
+      inside = (((n[0] ^ c[0]) | (n[1] ^ c[1]) | (n[2] ^ c[2])) >> span) == 0;
+    }
   }
 }
 
