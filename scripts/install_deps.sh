@@ -11,6 +11,8 @@ packages=(
   xvfb x11-apps imagemagick libgl1-mesa-dri         # pcl_viewer screenshots: virtual display, software GL
   gnuplot-nox                                       # benchmark plots
   clang libclang-rt-14-dev                          # libFuzzer for the fuzz targets
+  python3-dev pybind11-dev python3-numpy            # the Python package
+  python3-pytest python3-dask python3-distributed   # its tests and the tiled mapping
 )
 
 missing=()

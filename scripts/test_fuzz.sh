@@ -11,7 +11,7 @@ seconds=${FUZZ_SECONDS:-60}
 flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DPCL_FOT_POINT_TYPES="pcl::PointXYZ" -DPCL_FOT_BUILD_TESTS=OFF \
-  -DPCL_FOT_BUILD_TOOLS=OFF -DPCL_FOT_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$flags" \
+  -DPCL_FOT_BUILD_TOOLS=OFF -DPCL_FOT_BUILD_PYTHON=OFF -DPCL_FOT_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined -fuse-ld=lld" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined -fuse-ld=lld" >/dev/null
 cmake --build build-fuzz -j2 --target fuzz_fot_loader fuzz_bt_import fuzz_ot_import fuzz_scan_insertion \

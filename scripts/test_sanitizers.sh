@@ -11,7 +11,7 @@ export CMAKE_GENERATOR=${CMAKE_GENERATOR:-Ninja}  # see scripts/build.sh
 configure() {  # <build dir> <point types> <sanitizer flags> [<C compiler> <C++ compiler>]
   CC=${4:-cc} CXX=${5:-c++} cmake -S . -B "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
-        -DPCL_FOT_BUILD_BENCHMARKS=OFF -DPCL_FOT_POINT_TYPES="$2" \
+        -DPCL_FOT_BUILD_BENCHMARKS=OFF -DPCL_FOT_BUILD_PYTHON=OFF -DPCL_FOT_POINT_TYPES="$2" \
         -DCMAKE_CXX_FLAGS="$3 -fno-omit-frame-pointer" -DCMAKE_EXE_LINKER_FLAGS="$3 -fuse-ld=lld" \
         -DCMAKE_SHARED_LINKER_FLAGS="$3 -fuse-ld=lld" >/dev/null
 }

@@ -11,6 +11,7 @@
 #include <octomap/OcTree.h>
 #include <Eigen/Geometry>
 
+#include <pcl_fot/dense/fast_occ_mesh.h>
 #include <pcl_fot/io/fot_file.h>
 #include <pcl_fot/io/octomap.h>
 #include <pcl_fot/mapping/scan_insertion.h>
@@ -257,6 +258,57 @@ TEST(LogOddsMapping, BinaryRuleStaysTheLatestScanPerMapOrPerCall) {
   EXPECT_TRUE(per_map == per_call);
   EXPECT_EQ(per_map.getUnsettledCount(), 0u);
   EXPECT_EQ(per_map.getLogOdds(Key{80, 0, 0}), SensorModel().clampMaxLogOdds()) << "the wall, settled";
+}
+
+TEST(LogOddsMapping, TracedScansAndRegionsWriteTheWholeMapsCells) {
+  // What tiled mapping (python/pcl_fot/tiles.py) rests on: a scan traced once and written later, or written a
+  // region at a time, gives each cell the whole map's updates.
+  Sequence scans;
+  for (const auto& cloud : fot_tools::scanSyntheticRoom()) {
+    const Eigen::Affine3f pose =
+        Eigen::Translation3f(cloud->sensor_origin_.head<3>()) * cloud->sensor_orientation_.normalized();
+    scans.push_back(placed(*cloud, pose));
+  }
+  std::vector<KeyBox> boxes;  // the level-7 nodes around key 0: the room lies inside them
+  for (unsigned t = 0; t < 8; ++t) {
+    const Key lo{(t & 1) ? 0 : -128, (t & 2) ? 0 : -128, (t & 4) ? 0 : -128};
+    boxes.push_back(KeyBox{lo, Key{lo.x + 127, lo.y + 127, lo.z + 127}});
+  }
+  for (const UpdateRule rule : {UpdateRule::LogOdds, UpdateRule::Binary}) {
+    ScanOptions options;
+    options.rule = rule;
+    FastOctTree whole(0.05), traced(0.05), stitched(0.05);
+    std::vector<FastOctTree> tiles(boxes.size(), FastOctTree(0.05));
+    std::size_t outside = 0;
+    for (const Scan& s : scans) {
+      const std::size_t n = s.xyz.size() / 3;
+      insertRays(whole, s.sensor, s.xyz.data(), n, 12, options);
+      const std::vector<ScanBlock> blocks = traceScan(traced, s.sensor, s.xyz.data(), n, 12, options);
+      applyScan(traced, blocks.data(), blocks.size(), options);
+      for (std::size_t t = 0; t < boxes.size(); ++t) {
+        ScanOptions tile = options;
+        tile.region = boxes[t];
+        outside += insertRays(tiles[t], s.sensor, s.xyz.data(), n, 12, tile).outside_region;
+      }
+    }
+    for (std::size_t t = 0; t < boxes.size(); ++t) {
+      tiles[t].forEachRegion([&](const Region& r) {
+        const std::int32_t edge = (std::int32_t(1) << r.level) - 1;
+        EXPECT_TRUE(boxes[t].contains(r.min_key) &&
+                    boxes[t].contains(Key{r.min_key.x + edge, r.min_key.y + edge, r.min_key.z + edge}));
+        return true;
+      });
+      stitched.merge(tiles[t]);
+    }
+    EXPECT_GT(whole.getOccupiedCount(), 1000u);
+    EXPECT_TRUE(traced == whole) << "rule " << int(rule);
+    EXPECT_TRUE(stitched == whole) << "rule " << int(rule);
+    EXPECT_GT(outside, 0u) << "rays that cannot reach a tile are not walked";
+  }
+  FastOccMesh grid(CellGrid(0.05), 64);
+  ScanOptions region;
+  region.region = boxes[0];
+  EXPECT_THROW(insertRays(grid, scans[0].sensor, scans[0].xyz.data(), 1, 12, region), std::invalid_argument);
 }
 
 TEST_P(LogOddsMappingOnScans, MergeEqualsTheMapOfAllScansAndRefusesAnotherGrid) {

@@ -12,6 +12,7 @@
 #include <pcl_fot/pcl/cloud_insertion.h>
 
 #include "cloud_file.h"
+#include "tile_set.h"
 #include "tool_common.h"
 
 using namespace pcl::console;
@@ -23,7 +24,8 @@ void printHelp(const char* prog) {
   print_info(
       "Converts a map, or builds one from a point cloud, by the files' extensions.\n\n"
       "Syntax: %s input output [options]\n\n"
-      "  input   .fot (pcl_fot map), .bt or .ot (OctoMap binary or full map), or .pcd / .ply (a point\n"
+      "  input   .fot (pcl_fot map), .bt or .ot (OctoMap binary or full map), a tile set (the directory\n"
+      "          or tiles.json of python3 -m pcl_fot.tiles: its tiles as one map), or .pcd / .ply (a point\n"
       "          cloud: its points become occupied cells, no ray tracing; needs -res)\n"
       "  output  .fot, .bt (OctoMap's maximum-likelihood map), .ot (OctoMap's full map, with every\n"
       "          log-odds), .pcd (voxel centres for pcl_viewer) or .vtk (voxel cube mesh for pcl_viewer)\n\n"
@@ -99,6 +101,7 @@ pcl::fot::FastOctTree mapOfCloud(const std::string& input, const Arguments& args
 /** The input map, by its extension, of at most max_bytes. */
 pcl::fot::FastOctTree readInput(const std::string& input, const Arguments& args,
                                 const std::vector<double>& origin, std::size_t max_bytes) {
+  if (isTileSet(input)) return loadTileSet(input, max_bytes);
   const std::string in_ext = extension(input);
   if (in_ext == ".pcd" || in_ext == ".ply") return mapOfCloud(input, args, origin);
   if (in_ext == ".bt" || in_ext == ".ot") {
@@ -108,7 +111,8 @@ pcl::fot::FastOctTree readInput(const std::string& input, const Arguments& args,
     return in_ext == ".bt" ? pcl::fot::io::loadBt(input, options) : pcl::fot::io::loadOt(input, options);
   }
   if (in_ext == ".fot") return pcl::fot::io::loadFot(input, max_bytes);
-  throw ToolError(kExitUsage, "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd or .ply");
+  throw ToolError(kExitUsage,
+                  "cannot read '" + input + "': the input must be .fot, .bt, .ot, .pcd, .ply or a tile set");
 }
 
 /** Writes the map by the output's extension; returns what was written. */
@@ -143,7 +147,7 @@ int main(int argc, char** argv) {
       return kExitOk;
     }
     const std::string &input = args.positional()[0], &output = args.positional()[1];
-    refuseOverwrites({input}, {output});
+    refuseOverwrites(isTileSet(input) ? tileSetFiles(input) : std::vector<std::string>{input}, {output});
     const std::string out_ext = extension(output);
     if (out_ext != ".fot" && out_ext != ".bt" && out_ext != ".ot" && out_ext != ".pcd" && out_ext != ".vtk")
       throw ToolError(kExitUsage,

@@ -15,7 +15,8 @@ void printHelp(const char* prog) {
   print_info(
       "Prints what maps hold: resolution, origin, the extent of their known cells, depth, cell counts by\n"
       "state, node words and bytes.\n\n"
-      "Syntax: %s map.fot|map.bt|map.ot [more maps ...]\n\n"
+      "Syntax: %s map.fot|map.bt|map.ot|tile set [more maps ...]\n\n"
+      "A tile set (the directory or tiles.json of python3 -m pcl_fot.tiles) is read as one map.\n\n"
       "  -max_memory <MiB>  the most memory a map may take (default: 1024); a file that needs more is\n"
       "                     refused at once\n"
       "  -h                 this help\n\n"

@@ -1,5 +1,7 @@
 #include "tool_common.h"
 
+#include "tile_set.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -79,6 +81,7 @@ bool readLine(std::istream& in, std::string& line, std::size_t max_chars) {
 }
 
 bool isMapFile(const std::string& path) {
+  if (isTileSet(path)) return true;
   const std::string ext = extension(path);
   return ext == ".fot" || ext == ".bt" || ext == ".ot";
 }
@@ -91,13 +94,14 @@ std::size_t maxMemory(const Arguments& args) {
 }
 
 pcl::fot::FastOctTree loadMap(const std::string& path, std::size_t max_bytes) {
+  if (isTileSet(path)) return loadTileSet(path, max_bytes);
   const std::string ext = extension(path);
   pcl::fot::io::OctoMapImportOptions options;
   options.max_pool_bytes = max_bytes;
   if (ext == ".fot") return pcl::fot::io::loadFot(path, max_bytes);
   if (ext == ".bt") return pcl::fot::io::loadBt(path, options);
   if (ext == ".ot") return pcl::fot::io::loadOt(path, options);
-  throw ToolError(kExitUsage, "'" + path + "' is not a .fot, .bt or .ot map");
+  throw ToolError(kExitUsage, "'" + path + "' is not a .fot, .bt or .ot map or a tile set");
 }
 
 }  // namespace fot_tools

@@ -48,10 +48,10 @@ bool readLine(std::istream& in, std::string& line, std::size_t max_chars);
  */
 std::size_t maxMemory(const Arguments& args);
 
-/** Reads a .fot, .bt or .ot map of at most max_bytes. */
+/** Reads a .fot, .bt or .ot map, or a tile set (tile_set.h), of at most max_bytes. */
 pcl::fot::FastOctTree loadMap(const std::string& path, std::size_t max_bytes);
 
-/** True for the extensions loadMap reads. */
+/** True for what loadMap reads: its extensions and tile sets. */
 bool isMapFile(const std::string& path);
 
 /**

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <pcl_fot/mapping/scan_insertion.h>
 #include <pcl_fot/tree/key.h>
 #include <pcl_fot/tree/tree_coord.h>
 
@@ -20,11 +21,7 @@ namespace detail {
  */
 class ScanCells {
  public:
-  struct Block {
-    std::uint32_t at[3];
-    std::uint64_t passed = 0;  ///< cells a ray passes
-    std::uint64_t hit = 0;     ///< endpoint cells: they get a hit and no miss
-  };
+  using Block = ScanBlock;
 
   explicit ScanCells(std::size_t expected_blocks);
 
@@ -39,6 +36,7 @@ class ScanCells {
   void join(const ScanCells& other);
 
   const std::vector<Block>& blocks() const { return blocks_; }
+  std::vector<Block> releaseBlocks() { return std::move(blocks_); }
 
  private:
   void cell(const Key& k, std::uint64_t Block::*field) {

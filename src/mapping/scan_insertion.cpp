@@ -39,6 +39,68 @@ bool traceable(const Key& k) {
   return k.x > kMinKey && k.x < kMaxKey && k.y > kMinKey && k.y < kMaxKey && k.z > kMinKey && k.z < kMaxKey;
 }
 
+/**
+ * Which rays can pass a cell of the scan's region. A ray's walk starts in the sensor's cell and steps, on
+ * each axis, only the way the ray points, so its cells lie between the sensor's cell and the end's (a cell
+ * or two past the end, see traceable). Within that box it passes only cells the segment meets, give or take
+ * the walk's rounding: its float direction strays by about 1e-7 of the length. The test against the region
+ * widens it by a tenth of a cell plus 1e-6 of the ray's length, and lengthens the segment by two cells.
+ */
+class RegionCull {
+ public:
+  RegionCull(const CellGrid& grid, const float sensor[3], const Key& sensor_key,
+             const std::optional<KeyBox>& region)
+      : region_(region), sensor_key_{sensor_key.x, sensor_key.y, sensor_key.z} {
+    if (!region) return;
+    const double res = grid.resolution(), margin = 0.1 * res;
+    const std::int32_t lo[3] = {region->min.x, region->min.y, region->min.z};
+    const std::int32_t hi[3] = {region->max.x, region->max.y, region->max.z};
+    for (unsigned a = 0; a < 3; ++a) {
+      sensor_[a] = sensor[a];
+      key_lo_[a] = lo[a], key_hi_[a] = hi[a];
+      lo_[a] = grid.origin()[a] + double(lo[a]) * res - margin;
+      hi_[a] = grid.origin()[a] + (double(hi[a]) + 1.0) * res + margin;
+    }
+    extra_ = 2.0 * res;
+  }
+
+  bool reaches(const float end[3], const Key& end_key) const {
+    if (!region_) return true;
+    const std::int32_t e[3] = {end_key.x, end_key.y, end_key.z};
+    for (unsigned a = 0; a < 3; ++a) {
+      const std::int32_t s = sensor_key_[a];
+      const std::int32_t lo = e[a] > s ? s : e[a] - 2, hi = e[a] < s ? s : e[a] + 2;
+      if (lo > key_hi_[a] || hi < key_lo_[a]) return false;
+    }
+    double d[3], length = 0.0;
+    for (unsigned a = 0; a < 3; ++a) {
+      d[a] = double(end[a]) - sensor_[a];
+      length += d[a] * d[a];
+    }
+    length = std::sqrt(length);
+    const double widen = 1e-6 * length;
+    double t0 = 0.0, t1 = length > 0.0 ? 1.0 + extra_ / length : 1.0;
+    for (unsigned a = 0; a < 3; ++a) {
+      const double lo = lo_[a] - widen, hi = hi_[a] + widen;
+      if (d[a] == 0.0) {
+        if (sensor_[a] < lo || sensor_[a] > hi) return false;
+        continue;
+      }
+      double near = (lo - sensor_[a]) / d[a], far = (hi - sensor_[a]) / d[a];
+      if (near > far) std::swap(near, far);
+      t0 = std::max(t0, near);
+      t1 = std::min(t1, far);
+    }
+    return t0 <= t1;
+  }
+
+ private:
+  const std::optional<KeyBox>& region_;
+  std::int32_t sensor_key_[3];
+  std::int32_t key_lo_[3] = {0, 0, 0}, key_hi_[3] = {0, 0, 0};
+  double sensor_[3] = {0, 0, 0}, lo_[3] = {0, 0, 0}, hi_[3] = {0, 0, 0}, extra_ = 0.0;
+};
+
 /** A scan's rays, checked: each ends at a valid key that keeps its cells inside the key range. */
 struct ScanRays {
   std::vector<float> ends;  // xyz of each ray's end that the walker reaches
@@ -55,6 +117,7 @@ ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* x
   if (!grid.pointToKey(sensor[0], sensor[1], sensor[2], sensor_key) || !traceable(sensor_key))
     throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
 
+  const RegionCull cull(grid, sensor, sensor_key, options.region);
   ScanRays rays;
   rays.ends.reserve(3 * count);
   const auto addRay = [&](const float* end, const Key& end_key) {
@@ -102,6 +165,10 @@ ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* x
         ++stats.out_of_range;
         continue;
       }
+      if (!cull.reaches(end, end_key)) {
+        ++stats.outside_region;
+        continue;
+      }
       addRay(end, end_key);
       ++stats.truncated;
       continue;
@@ -111,8 +178,12 @@ ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* x
       ++stats.out_of_range;
       continue;
     }
+    if (!cull.reaches(p, key)) {
+      ++stats.outside_region;
+      continue;
+    }
     addRay(p, key);
-    rays.endpoints.push_back(key);
+    if (!options.region || options.region->contains(key)) rays.endpoints.push_back(key);
   }
   stats.occupied = rays.endpoints.size();
   return rays;
@@ -319,6 +390,34 @@ detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const
   return cells;
 }
 
+/** The cells of a 4×4×4 block (see detail::block_cells) inside the scan's region: all without one. */
+class RegionMask {
+ public:
+  explicit RegionMask(const std::optional<KeyBox>& region) : all_(!region) {
+    if (region) lo_ = TreeCoord(region->min), hi_ = TreeCoord(region->max);
+  }
+
+  std::uint64_t operator()(const std::uint32_t (&block)[3]) const {
+    if (all_) return ~std::uint64_t(0);
+    unsigned axis[3] = {0, 0, 0};
+    for (unsigned a = 0; a < 3; ++a)
+      for (unsigned d = 0; d < 4; ++d) {
+        const std::uint32_t c = 4 * block[a] + d;
+        axis[a] |= unsigned(c >= lo_[a] && c <= hi_[a]) << d;
+      }
+    std::uint64_t plane = 0, cube = 0;  // cell bit x + 4y + 16z
+    for (unsigned y = 0; y < 4; ++y)
+      if ((axis[1] >> y) & 1u) plane |= std::uint64_t(axis[0]) << (4 * y);
+    for (unsigned z = 0; z < 4; ++z)
+      if ((axis[2] >> z) & 1u) cube |= plane << (16 * z);
+    return cube;
+  }
+
+ private:
+  bool all_;
+  TreeCoord lo_, hi_;
+};
+
 /**
  * Writes the scan's cells a leaf at a time, in the order the rays first reached their blocks, which keeps
  * LineBurstAccess's paths short: `write(leaf key, miss mask, hit mask)` returns what
@@ -327,13 +426,19 @@ detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const
  * endpoint are passed over: the last visited node answers for them. Returns the cells marked free.
  */
 template <typename Write>
-std::uint64_t writeCells(const detail::ScanCells& cells, Write&& write) {
+std::uint64_t writeCells(const ScanBlock* blocks, std::size_t count, const RegionMask& region,
+                         Write&& write) {
   std::uint32_t cube[3] = {0, 0, 0};
   unsigned cube_shift = 32;  // no cube yet
   std::uint64_t free = 0;
-  for (const detail::ScanCells::Block& b : cells.blocks()) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const ScanBlock& block = blocks[i];
+    const std::uint64_t inside = region(block.at);
+    const detail::ScanCells::Block b{
+        {block.at[0], block.at[1], block.at[2]}, block.passed & inside, block.hit & inside};
     const std::uint64_t miss = b.passed & ~b.hit;
     free += std::uint64_t(__builtin_popcountll(miss));
+    if ((b.passed | b.hit) == 0) continue;
     if (b.hit == 0 && cube_shift < 32 &&
         ((b.at[0] ^ cube[0]) | (b.at[1] ^ cube[1]) | (b.at[2] ^ cube[2])) >> cube_shift == 0)
       continue;
@@ -362,25 +467,40 @@ ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, 
   const ScanRays rays = prepareRays(grid, sensor, xyz, count, stride_bytes, options, stats);
   const bool log_odds = options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds;
   const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
-  if (!log_odds && workers == 1) {
+  if (!log_odds && workers == 1 && !options.region) {
     TreeWriter writer(map, options.line_burst, count);
     streamCells(writer, grid, sensor, rays, stats);
     return stats;
   }
   const detail::ScanCells cells = gatherCells(grid, sensor, rays, workers, stats);
+  stats.free_cells = applyScan(map, cells.blocks().data(), cells.blocks().size(), options);
+  return stats;
+}
+
+std::vector<ScanBlock> traceScan(const FastOctTree& map, const float sensor[3], const float* xyz,
+                                 std::size_t count, std::size_t stride_bytes, const ScanOptions& options,
+                                 ScanStats* stats) {
+  ScanStats own;
+  ScanStats& s = stats ? *stats : own;
+  s = ScanStats{};
+  const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, s);
+  const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
+  return gatherCells(map.getGrid(), sensor, rays, workers, s).releaseBlocks();
+}
+
+std::uint64_t applyScan(FastOctTree& map, const ScanBlock* blocks, std::size_t count,
+                        const ScanOptions& options) {
   Accessor accessor(map, options.line_burst);
-  if (log_odds) {
-    stats.free_cells = writeCells(cells, [&](const Key& k, std::uint32_t miss, std::uint32_t hit) {
+  const RegionMask region(options.region);
+  if (options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds)
+    return writeCells(blocks, count, region, [&](const Key& k, std::uint32_t miss, std::uint32_t hit) {
       return accessor.updateLeaf(k, miss, hit);
     });
-    return stats;
-  }
-  stats.free_cells = writeCells(cells, [&](const Key& k, std::uint32_t free, std::uint32_t occupied) {
+  return writeCells(blocks, count, region, [&](const Key& k, std::uint32_t free, std::uint32_t occupied) {
     const unsigned skip = free ? accessor.setValidLeafCells(k, free, CellState::Free) : 0;
     if (occupied) accessor.setValidLeafCells(k, occupied, CellState::Occupied);
     return skip;
   });
-  return stats;
 }
 
 ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, std::size_t count,
@@ -388,6 +508,8 @@ ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, 
   if (options.rule == UpdateRule::LogOdds)
     throw std::invalid_argument(
         "pcl::fot::insertRays: the dense grid keeps no log-odds; use the Binary rule");
+  if (options.region)
+    throw std::invalid_argument("pcl::fot::insertRays: the dense grid maps no region; map the whole grid");
   ScanStats stats;
   const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, stats);
   GridWriter writer(map);

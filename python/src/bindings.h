@@ -1,0 +1,12 @@
+#pragma once
+// Private to the module: each part of the API binds itself into the module.
+
+#include <pybind11/pybind11.h>
+
+namespace pcl_fot_python {
+
+void bindMap(pybind11::module_& m);
+void bindSearch(pybind11::module_& m);
+void bindClouds(pybind11::module_& m);
+
+}  // namespace pcl_fot_python

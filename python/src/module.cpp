@@ -1,0 +1,13 @@
+// The pcl_fot extension module: the library's map, search and ψ on numpy arrays.
+
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+#include "bindings.h"
+
+PYBIND11_MODULE(_pcl_fot, m) {
+  m.doc() = "pcl_fot's FastOctTree, its nearest-neighbour search and psi on numpy arrays.";
+  pybind11::register_exception<pcl::fot::MemoryLimitError>(m, "MemoryLimitError", PyExc_MemoryError);
+  pcl_fot_python::bindMap(m);
+  pcl_fot_python::bindSearch(m);
+  pcl_fot_python::bindClouds(m);
+}
