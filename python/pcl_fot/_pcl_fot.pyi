@@ -63,6 +63,24 @@ class FastOctTree:
         """Ray-traces one scan. Without orientation (w, x, y, z) the points are in the map frame and origin is
         the sensor; with it they are in the sensor frame. Only cells inside region (two keys, bounds
         included) are written. NaN, Inf and out-of-range points are skipped and counted."""
+    def trace_scan(
+        self,
+        points: npt.ArrayLike,
+        origin: Triple,
+        orientation: Optional[Sequence[float]] = None,
+        *,
+        max_range: float = -1.0,
+        min_range: float = 0.0,
+        discretize: bool = False,
+        threads: int = 0,
+    ) -> Tuple[npt.NDArray[np.void], Dict[str, int]]:
+        """Walks a scan's rays as insert_scan does and returns its cells (4x4x4 blocks: at, passed, hit)
+        without writing this map; apply_scan writes them into any map of the same grid."""
+    def apply_scan(self, blocks: npt.NDArray[np.void], *, region: Optional[KeyBox] = None) -> int:
+        """Writes a traced scan with this map's rule; returns the cells marked free."""
+    @staticmethod
+    def block_keys(blocks: npt.NDArray[np.void]) -> npt.NDArray[np.int32]:
+        """Each block's lowest key: a block lies in the level-L tile key >> L (L >= 2)."""
     def point_keys(self, points: npt.ArrayLike) -> npt.NDArray[np.int32]: ...
     def get_log_odds(self, keys: npt.ArrayLike) -> npt.NDArray[np.float32]:
         """Each key's log-odds; NaN for an unknown cell."""
@@ -89,7 +107,8 @@ class FastOctTree:
     def load(path: str) -> "FastOctTree": ...
 
 class FastOctTreeSearch:
-    """Exact k-NN and radius search on an (N, 3) array; squared Euclidean distances, as PCL's."""
+    """Exact k-NN and radius search on an (N, 3) array; squared Euclidean distances, as PCL's. Queries may
+    run on many threads at once; add and remove need the search alone, as a write to a map does."""
     def __init__(self, points: Optional[npt.ArrayLike] = None, resolution: Optional[float] = None) -> None: ...
     def knn(
         self, queries: npt.ArrayLike, k: int

@@ -265,9 +265,10 @@ def _run(client, function, args, keys, progress, what):
 
 
 def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, workers=1, memory_limit=None,
-              stitch=True, progress=False):
+              stitch=False, progress=False):
     """Maps the scans tile by tile with Dask, on the cluster at `scheduler` or, without one, on a LocalCluster
-    of `workers` processes. Writes the tiles, tiles.json and, with `stitch`, the whole map as map.fot.
+    of `workers` processes. Writes the tiles and tiles.json: the tile set is the map (open_tile_set and the
+    tools read it as one). With `stitch`, also the whole map as map.fot, which needs it in one process.
     Returns the index's tile records, in tile order."""
     if not MIN_TILE_LEVEL <= level <= MAX_TILE_LEVEL:
         raise TileSetError("the tile level must be %d to %d, not %d" % (MIN_TILE_LEVEL, MAX_TILE_LEVEL, level))
@@ -305,7 +306,7 @@ def _main(argv=None):
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("map", help="map scans (.pcd, .ply) tile by tile into a tile set")
     run.add_argument("scans", nargs="+")
-    run.add_argument("-out", "--out", required=True, help="output directory: tiles/, tiles.json, map.fot")
+    run.add_argument("-out", "--out", required=True, help="output directory: tiles/, tiles.json (map.fot)")
     run.add_argument("--tile-level", type=int, required=True, help="tile edge 2**L cells, L from 2 to 15")
     run.add_argument("--scheduler", default="local", help="a Dask scheduler's address, or local (default)")
     run.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local workers (default: cores)")
@@ -315,7 +316,7 @@ def _main(argv=None):
     run.add_argument("-max_range", "--max-range", type=float, default=-1.0)
     run.add_argument("-min_range", "--min-range", type=float, default=0.0)
     run.add_argument("-binary", "--binary", action="store_true", help="the latest scan wins, not log-odds")
-    run.add_argument("--no-stitch", action="store_true", help="keep the tiles only; no map.fot")
+    run.add_argument("--stitch", action="store_true", help="also write the tiles merged as map.fot")
     info = commands.add_parser("info", help="summarise a tile set")
     info.add_argument("tile_set")
     args = parser.parse_args(argv)
@@ -330,7 +331,7 @@ def _main(argv=None):
         poses = read_poses(args.poses) if args.poses else None
         start = time.perf_counter()
         tiles = map_tiles(args.scans, args.out, spec, args.tile_level, poses, args.scheduler, args.workers,
-                          args.memory_limit, not args.no_stitch, progress=True)
+                          args.memory_limit, args.stitch, progress=True)
         print("%d tiles with cells in %s (%.1f s)" % (len(tiles), args.out, time.perf_counter() - start))
         return 0
     except (TileSetError, OSError, ValueError, RuntimeError) as e:

@@ -34,7 +34,7 @@ def cluster(request):
 def test_tiles_equal_the_single_process_map(room_scans, tmp_path, cluster, level):
     spec = tiles.MapSpec(0.05, rule="log_odds")
     paths = [s[0] for s in room_scans]
-    records = tiles.map_tiles(paths, str(tmp_path), spec, level, scheduler=cluster)
+    records = tiles.map_tiles(paths, str(tmp_path), spec, level, scheduler=cluster, stitch=True)
     assert len(records) > (1 if level == 6 else 20)
     whole = single_process_map(spec, paths)
     assert whole.occupied_count > 1000
@@ -64,7 +64,7 @@ def test_binary_rule_and_poses_from_a_file(room_scans, tmp_path):
 def test_damaged_tile_sets_fail_naming_the_tile(room_scans, tmp_path):
     spec = tiles.MapSpec(0.05)
     out = tmp_path / "set"
-    records = tiles.map_tiles([s[0] for s in room_scans[:2]], str(out), spec, 5, workers=1, stitch=False)
+    records = tiles.map_tiles([s[0] for s in room_scans[:2]], str(out), spec, 5, workers=1)
     assert not (out / "map.fot").exists()
     name = records[0]["name"]
     tile = out / records[0]["file"]
@@ -101,7 +101,8 @@ def test_damaged_tile_sets_fail_naming_the_tile(room_scans, tmp_path):
 
 def test_command_line_maps_and_summarises(room_scans, tmp_path, capsys):
     out = str(tmp_path / "cli")
-    args = ["map", "--workers", "2", "--tile-level", "6", "-res", "0.05", "-out", out] + [s[0] for s in room_scans]
+    args = ["map", "--workers", "2", "--tile-level", "6", "-res", "0.05", "--stitch", "-out", out]
+    args += [s[0] for s in room_scans]
     assert tiles._main(args) == 0
     spec = tiles.MapSpec(0.05)
     assert same_cells(pcl_fot.FastOctTree.load(os.path.join(out, "map.fot")),
@@ -113,7 +114,7 @@ def test_command_line_maps_and_summarises(room_scans, tmp_path, capsys):
 def test_tools_read_a_tile_set_as_one_map(room_scans, tmp_path, tools_dir):
     spec = tiles.MapSpec(0.05)
     out = tmp_path / "set"
-    tiles.map_tiles([s[0] for s in room_scans], str(out), spec, 5, workers=1, stitch=False)
+    tiles.map_tiles([s[0] for s in room_scans], str(out), spec, 5, workers=1)
     whole = single_process_map(spec, [s[0] for s in room_scans])
     for tile_set in (out, out / "tiles.json"):
         converted = str(tmp_path / "whole.fot")
@@ -154,4 +155,4 @@ def test_tiles_equal_the_single_process_map_on_real_scans(tmp_path, level):
     tiles.map_tiles(paths, str(tmp_path), spec, level, workers=2)
     whole = single_process_map(spec, paths)
     assert whole.occupied_count > 10000
-    assert same_cells(pcl_fot.FastOctTree.load(str(tmp_path / "map.fot")), whole)
+    assert not (tmp_path / "map.fot").exists() and same_cells(tiles.open_tile_set(str(tmp_path)), whole)
