@@ -27,6 +27,7 @@ import resource
 import shutil
 import sys
 import time
+import uuid
 
 import numpy as np
 
@@ -280,14 +281,15 @@ def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, work
     work_dir = os.path.join(out_dir, ".work")
     os.makedirs(work_dir, exist_ok=True)
     n = len(scan_paths)
+    run = uuid.uuid4().hex[:8]  # task keys of their own: a cluster may hold another run's tasks
     client, cluster = _client(scheduler, workers, memory_limit)
     try:
         touched = _run(client, trace_task,
                        [(spec, level, i, p, poses[i] if poses else None, work_dir) for i, p in enumerate(scan_paths)],
-                       ["trace-scan-%d" % i for i in range(n)], progress, "scans traced")
+                       ["trace-scan-%d-%s" % (i, run) for i in range(n)], progress, "scans traced")
         tiles = sorted(set(t for scan in touched for t in scan))
         records = _run(client, map_tile, [(spec, level, t, n, work_dir, out_dir) for t in tiles],
-                       ["tile-" + tile_name(level, t) for t in tiles], progress, "tiles mapped")
+                       ["tile-%s-%s" % (tile_name(level, t), run) for t in tiles], progress, "tiles mapped")
     finally:
         client.close()
         if cluster is not None:
