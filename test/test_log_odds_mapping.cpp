@@ -107,6 +107,17 @@ void expectSameAsOctoMap(const Sequence& scans, double res, bool discretize = fa
   }
 }
 
+/** The embedded room's scans, each placed by its VIEWPOINT. */
+Sequence syntheticRoom() {
+  Sequence scans;
+  for (const auto& cloud : fot_tools::scanSyntheticRoom()) {
+    const Eigen::Affine3f pose =
+        Eigen::Translation3f(cloud->sensor_origin_.head<3>()) * cloud->sensor_orientation_.normalized();
+    scans.push_back(placed(*cloud, pose));
+  }
+  return scans;
+}
+
 Eigen::Affine3f ndtGuess() {
   return Eigen::Translation3f(1.79387f, 0.720047f, 0.0f) *
          Eigen::AngleAxisf(0.6931f, Eigen::Vector3f::UnitZ());
@@ -160,13 +171,7 @@ TEST_P(LogOddsMappingOnScans, ThreeKinectFramesDiscretizedEqualOctoMap) {
 }
 
 TEST(LogOddsMapping, EmbeddedSyntheticRoomEqualsOctoMap) {
-  Sequence scans;
-  for (const auto& cloud : fot_tools::scanSyntheticRoom()) {
-    const Eigen::Affine3f pose =
-        Eigen::Translation3f(cloud->sensor_origin_.head<3>()) * cloud->sensor_orientation_.normalized();
-    scans.push_back(placed(*cloud, pose));
-  }
-  expectSameAsOctoMap(scans, 0.05);
+  expectSameAsOctoMap(syntheticRoom(), 0.05);
 }
 
 TEST_P(LogOddsMappingOnScans, OneScanRepeatedUntilItClampsEqualsOctoMap) {
@@ -263,12 +268,7 @@ TEST(LogOddsMapping, BinaryRuleStaysTheLatestScanPerMapOrPerCall) {
 TEST(LogOddsMapping, TracedScansAndRegionsWriteTheWholeMapsCells) {
   // What tiled mapping (python/pcl_fot/tiles.py) rests on: a scan traced once and written later, or written a
   // region at a time, gives each cell the whole map's updates.
-  Sequence scans;
-  for (const auto& cloud : fot_tools::scanSyntheticRoom()) {
-    const Eigen::Affine3f pose =
-        Eigen::Translation3f(cloud->sensor_origin_.head<3>()) * cloud->sensor_orientation_.normalized();
-    scans.push_back(placed(*cloud, pose));
-  }
+  const Sequence scans = syntheticRoom();
   std::vector<KeyBox> boxes;  // the level-7 nodes around key 0: the room lies inside them
   for (unsigned t = 0; t < 8; ++t) {
     const Key lo{(t & 1) ? 0 : -128, (t & 2) ? 0 : -128, (t & 4) ? 0 : -128};

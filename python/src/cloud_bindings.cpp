@@ -19,9 +19,7 @@ py::dict readCloud(const std::string& path) {
   {
     py::gil_scoped_release unlocked;
     const std::string bytes = pcl::fot::io::readFile(path, kMaxCloudBytes);
-    const std::size_t dot = path.rfind('.');
-    std::string e = dot == std::string::npos ? "" : path.substr(dot);
-    for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const std::string e = extensionOf(path);
     try {
       if (e == ".pcd")
         cloud = fot_tools::parsePcd(bytes.data(), bytes.size());

@@ -35,13 +35,6 @@ std::string ruleName(UpdateRule rule) {
   return rule == UpdateRule::LogOdds ? "log_odds" : "binary";
 }
 
-std::string extensionOf(const std::string& path) {
-  const std::size_t dot = path.rfind('.');
-  std::string e = dot == std::string::npos ? "" : path.substr(dot);
-  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
-
 py::dict statsDict(const pcl::fot::ScanStats& s) {
   py::dict d;
   d["rays"] = s.rays;
