@@ -4,7 +4,7 @@ set(allowed
   "pcl_fot/tree/tree_coord.h:pcl_fot/detail/bits.h"
   "pcl_fot/tree/fast_oct_tree.h:pcl_fot/detail/block_pages.h"
   "pcl_fot/dense/fast_occ_mesh.h:pcl_fot/detail/bits.h"
-  "pcl_fot/pcl/octree/octree_point_cloud.h:pcl_fot/detail/version_cache.h"
+  "pcl_fot/pcl/octree/octree_leaf_table.h:pcl_fot/detail/version_cache.h"
   "pcl_fot/pcl/octree/octree_point_cloud_search.h:pcl_fot/detail/version_cache.h"
   "pcl_fot/pcl/octree/impl/octree_point_cloud_search.hpp:pcl_fot/detail/bits.h"
   "pcl_fot/pcl/search/impl/fast_oct_tree_search.hpp:pcl_fot/detail/cloud_fingerprint.h"

@@ -1,11 +1,9 @@
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <deque>
 #include <memory>
 #include <type_traits>
-#include <unordered_map>
 #include <vector>
 
 #include <pcl/memory.h>
@@ -16,8 +14,8 @@
 #include <pcl/types.h>
 #include <Eigen/Core>
 
-#include <pcl_fot/detail/version_cache.h>
 #include <pcl_fot/pcl/octree/octree_containers.h>
+#include <pcl_fot/pcl/octree/octree_leaf_table.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
 namespace pcl {
@@ -32,8 +30,9 @@ namespace fot {
  * 2^depth cells. Keys, voxel centres and bounds are computed with PCL's arithmetic. The occupied cells
  * live in a FastOctTree at fixed keys, shifted as the box grows.
  *
- * Leaves hold LeafContainerT, pcl::octree's own container types (point indices by default), in a table
- * beside the tree keyed by each leaf's cube; with OctreeContainerEmpty there is no table and the tree alone
+ * The box, the tree and the table of leaves are an OctreeLeafTable, compiled once for every point type; this
+ * class adds the points and the leaves' LeafContainerT, pcl::octree's own container types (point indices by
+ * default), one per slot of the table. With OctreeContainerEmpty there are no containers and the tree alone
  * answers (OctreePointCloudOccupancy). Branches hold nothing: BranchContainerT is accepted for PCL's
  * signature only. Under enableDynamicDepth, leaves stay as shallow as PCL keeps them.
  *
@@ -63,34 +62,8 @@ class OctreePointCloud {
  private:
   /** Whether leaves hold containers; the occupancy octree's leaves are the tree's cells. */
   static constexpr bool kHoldsLeaves = !std::is_same<LeafContainerT, OctreeContainerEmpty>::value;
-
-  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
-  struct LeafId {
-    Key corner;
-    std::uint32_t level;
-    bool operator==(const LeafId& o) const {
-      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
-    }
-  };
-  struct LeafIdHash {
-    std::size_t operator()(const LeafId& id) const {
-      std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
-      h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
-      h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) *
-           0x165667B19E3779F9ULL;
-      return std::size_t(h ^ (h >> 29));
-    }
-  };
-  /** PCL's branches: each one's cube, with the bit pattern of its children (bit i: child i exists). */
-  using BranchIndex = std::unordered_map<LeafId, std::uint8_t, LeafIdHash>;
-
-  /** One node of the octree pcl::octree would build. */
-  struct Node {
-    octree::OctreeKey key;  // as in PCL, only the bits of its depth
-    uindex_t depth;
-    std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf
-    bool leaf;
-  };
+  using LeafId = OctreeLeafTable::LeafId;
+  using Slot = OctreeLeafTable::Slot;
 
  public:
   /**
@@ -103,59 +76,49 @@ class OctreePointCloud {
    public:
     NodeIterator() = default;
     NodeIterator& operator++() {
-      advance();
+      walk_.advance();
       return *this;
     }
     NodeIterator operator++(int) {
       NodeIterator before = *this;
-      advance();
+      walk_.advance();
       return before;
     }
     /**
      * As PCL's: iterators of one octree are equal when both are at their end, or when they share their
      * maximum depth and stand on nodes of the same key. Iterators of two octrees are never equal.
      */
-    bool operator==(const NodeIterator& o) const {
-      if (tree_ != o.tree_) return false;
-      if (at_end_ || o.at_end_) return at_end_ && o.at_end_;
-      return max_depth_ == o.max_depth_ && node_.key == o.node_.key;
-    }
+    bool operator==(const NodeIterator& o) const { return tree_ == o.tree_ && walk_ == o.walk_; }
     bool operator!=(const NodeIterator& o) const { return !(*this == o); }
     /** As in PCL, a branch's key holds only the bits of its depth. */
-    const octree::OctreeKey& getCurrentOctreeKey() const { return node_.key; }
-    uindex_t getCurrentOctreeDepth() const { return node_.depth; }
-    bool isLeafNode() const { return node_.leaf; }
-    bool isBranchNode() const { return !node_.leaf; }
+    const octree::OctreeKey& getCurrentOctreeKey() const { return walk_.node().key; }
+    uindex_t getCurrentOctreeDepth() const { return walk_.node().depth; }
+    bool isLeafNode() const { return walk_.node().leaf; }
+    bool isBranchNode() const { return !walk_.node().leaf; }
     /** PCL's bit pattern of a branch's children (bit i: child i exists); 0 for a leaf. */
-    char getNodeConfiguration() const { return static_cast<char>(node_.children); }
+    char getNodeConfiguration() const { return static_cast<char>(walk_.node().children); }
     /**
      * The leaf's node from the octree's table; for a branch, one node of type BRANCH_NODE that all
      * branches share (branches hold nothing here).
      */
-    OctreeNode* getCurrentOctreeNode() const;
+    OctreeNode* getCurrentOctreeNode() const {
+      if (walk_.node().leaf) return tree_->leafAt(walk_.node().key, walk_.node().depth);
+      static BranchNode branch;  // branches hold nothing here; one node tells their type
+      return &branch;
+    }
     /** The leaf's container; only on a leaf. */
-    LeafContainerT& getLeafContainer() const { return tree_->leafAt(node_.key, node_.depth)->getContainer(); }
+    LeafContainerT& getLeafContainer() const {
+      return tree_->leafAt(walk_.node().key, walk_.node().depth)->getContainer();
+    }
 
    private:
     friend class OctreePointCloud;
-    /** Which nodes the walk stops at. */
-    enum class Stops : std::uint8_t { All, Leaves, OneDepth };
-    NodeIterator(const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth);
-    /** On to the next node the walk stops at, or to the end. */
-    void advance();
-    /** The node at this key and depth: a branch of the index, else a leaf. */
-    Node nodeAt(const octree::OctreeKey& key, uindex_t depth) const;
+    using Stops = OctreeLeafTable::Stops;
+    NodeIterator(const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth)
+        : tree_(tree), walk_(&tree->table_, depth_first, stops, max_depth) {}
 
     const OctreePointCloud* tree_ = nullptr;
-    std::shared_ptr<const BranchIndex> branches_;
-    bool depth_first_ = true;
-    Stops stops_ = Stops::All;
-    uindex_t max_depth_ = 0;
-    Node node_{};
-    bool at_end_ = true;
-    // The nodes still to visit: depth first takes the last (children pushed last to first), breadth first
-    // the first.
-    std::deque<Node> pending_;
+    OctreeLeafTable::NodeWalk walk_;
   };
   using Iterator = NodeIterator;
   using ConstIterator = NodeIterator;
@@ -184,8 +147,8 @@ class OctreePointCloud {
   double getEpsilon() const { return epsilon_; }
   /** Only while the tree is empty, as in PCL. */
   void setResolution(double resolution_arg);
-  double getResolution() const { return resolution_; }
-  uindex_t getTreeDepth() const { return depth_; }
+  double getResolution() const { return table_.resolution(); }
+  uindex_t getTreeDepth() const { return table_.depth(); }
 
   /** Adds every finite point of the input cloud (or of its indices) to its leaf, in index order. */
   void addPointsFromInputCloud();
@@ -240,15 +203,19 @@ class OctreePointCloud {
   double getVoxelSquaredDiameter(uindex_t tree_depth_arg) const {
     return 3.0 * getVoxelSquaredSideLen(tree_depth_arg);
   }
-  double getVoxelSquaredDiameter() const { return getVoxelSquaredDiameter(depth_); }
-  double getVoxelSquaredSideLen(uindex_t tree_depth_arg) const;
-  double getVoxelSquaredSideLen() const { return getVoxelSquaredSideLen(depth_); }
+  double getVoxelSquaredDiameter() const { return getVoxelSquaredDiameter(getTreeDepth()); }
+  double getVoxelSquaredSideLen(uindex_t tree_depth_arg) const {
+    return table_.voxelSquaredSideLen(tree_depth_arg);
+  }
+  double getVoxelSquaredSideLen() const { return getVoxelSquaredSideLen(getTreeDepth()); }
   /** The bounds of the node's cube, at its depth, as PCL computes them. */
-  void getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const;
+  void getVoxelBounds(const NodeIterator& iterator, Eigen::Vector3f& min_pt, Eigen::Vector3f& max_pt) const {
+    table_.voxelBounds(iterator.getCurrentOctreeKey(), iterator.getCurrentOctreeDepth(), min_pt, max_pt);
+  }
 
   /** Depth-first, children in index order; max_depth_arg 0 means the full depth. */
   NodeIterator begin(uindex_t max_depth_arg = 0u) const {
-    return NodeIterator(this, true, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+    return NodeIterator(this, true, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : getTreeDepth());
   }
   NodeIterator end() const {
     NodeIterator at_end;
@@ -261,7 +228,8 @@ class OctreePointCloud {
   NodeIterator depth_end() const { return end(); }
   /** Level by level, from the root down. */
   NodeIterator breadth_begin(uindex_t max_depth_arg = 0u) const {
-    return NodeIterator(this, false, NodeIterator::Stops::All, max_depth_arg ? max_depth_arg : depth_);
+    return NodeIterator(this, false, NodeIterator::Stops::All,
+                        max_depth_arg ? max_depth_arg : getTreeDepth());
   }
   NodeIterator breadth_end() const { return end(); }
   /** The nodes at one depth, in breadth-first order; none, with PCL_WARN, deeper than the tree. */
@@ -269,43 +237,44 @@ class OctreePointCloud {
   NodeIterator fixed_depth_end() const { return end(); }
   /** The leaves, depth first; those deeper than max_depth_arg are left out. */
   NodeIterator leaf_depth_begin(uindex_t max_depth_arg = 0u) const {
-    return NodeIterator(this, true, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
+    return NodeIterator(this, true, NodeIterator::Stops::Leaves,
+                        max_depth_arg ? max_depth_arg : getTreeDepth());
   }
   NodeIterator leaf_depth_end() const { return end(); }
   /** The leaves, level by level (they differ from depth first only under dynamic depth). */
   NodeIterator leaf_breadth_begin(uindex_t max_depth_arg = 0u) const {
-    return NodeIterator(this, false, NodeIterator::Stops::Leaves, max_depth_arg ? max_depth_arg : depth_);
+    return NodeIterator(this, false, NodeIterator::Stops::Leaves,
+                        max_depth_arg ? max_depth_arg : getTreeDepth());
   }
   NodeIterator leaf_breadth_end() const { return end(); }
 
   /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
-  bool existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const;
-  /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
-  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg);
-
-  std::size_t getLeafCount() const {
-    if constexpr (kHoldsLeaves)
-      return leaves_.size();
-    else
-      return std::size_t(tree_.getOccupiedCount());
+  bool existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
+    return table_.existLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
   }
+  /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
+  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
+    table_.removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
+  }
+
+  std::size_t getLeafCount() const { return table_.leafCount(); }
   /** The branch nodes pcl::octree would hold for these voxels, its root included. */
-  std::size_t getBranchCount() const;
+  std::size_t getBranchCount() const { return table_.branchCount(); }
   /** Empties the tree and resets the bounding box; the depth stays, as in PCL. */
-  void deleteTree();
+  void deleteTree() {
+    table_.clear();
+    nodes_.clear();
+  }
   /**
    * PCL's dynamic depth: a new leaf is made as shallow as the path allows, and a leaf that holds
    * maxObjsPerLeaf points or more splits when the next point arrives. 0 turns it off. Only while the tree is
    * empty. Leaves of OctreeContainerEmpty count no points, so they never split (as in PCL).
    */
-  void enableDynamicDepth(std::size_t maxObjsPerLeaf);
+  void enableDynamicDepth(std::size_t maxObjsPerLeaf) { table_.enableDynamicDepth(maxObjsPerLeaf); }
 
   /** The FastOctTree holding the voxels (keys shifted from pcl::octree's; see pclKeyToTreeKey). */
-  const FastOctTree& getFastOctTree() const { return tree_; }
-  Key pclKeyToTreeKey(const octree::OctreeKey& k) const {
-    return Key{std::int32_t(k.x) + offset_[0], std::int32_t(k.y) + offset_[1],
-               std::int32_t(k.z) + offset_[2]};
-  }
+  const FastOctTree& getFastOctTree() const { return table_.tree(); }
+  Key pclKeyToTreeKey(const octree::OctreeKey& k) const { return table_.pclKeyToTreeKey(k); }
 
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 
@@ -315,99 +284,75 @@ class OctreePointCloud {
   /** The leaf holding the voxel at this PCL key, creating it (as PCL's createLeaf) if there is none. */
   LeafNode* createLeaf(const octree::OctreeKey& key);
   /** The leaf holding the voxel at this PCL key; nullptr if none. */
-  LeafNode* findLeaf(const octree::OctreeKey& key) const;
+  LeafNode* findLeaf(const octree::OctreeKey& key) const { return node(table_.findLeaf(key)); }
   /** The leaf at this depth and key (a node's key, as iterators give it); nullptr if none. */
-  LeafNode* leafAt(const octree::OctreeKey& key, uindex_t depth) const;
+  LeafNode* leafAt(const octree::OctreeKey& key, uindex_t depth) const {
+    return node(table_.leafAt(key, depth));
+  }
   bool isPointWithinBoundingBox(double x, double y, double z) const {
-    return !(x < min_[0] || y < min_[1] || z < min_[2] || x >= max_[0] || y >= max_[1] || z >= max_[2]);
+    return table_.isPointWithinBoundingBox(x, y, z);
   }
   /** PCL's key: (point - min) / resolution, truncated; only for points inside the box. */
-  octree::OctreeKey pclKey(double x, double y, double z) const;
-  void pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const;
+  octree::OctreeKey pclKey(double x, double y, double z) const { return table_.pclKey(x, y, z); }
+  void pclKeyToCenter(const octree::OctreeKey& key, PointT& point) const {
+    voxelCenter(key, getTreeDepth(), point);
+  }
   /** PCL's genVoxelCenterFromOctreeKey: the centre of the node at this depth and key. */
-  void voxelCenter(const octree::OctreeKey& key, uindex_t depth, PointT& point) const;
+  void voxelCenter(const octree::OctreeKey& key, uindex_t depth, PointT& point) const {
+    double center[3];
+    table_.voxelCenter(key, depth, center);
+    point.x = static_cast<float>(center[0]);
+    point.y = static_cast<float>(center[1]);
+    point.z = static_cast<float>(center[2]);
+  }
   /** PCL's adoptBoundingBoxToPoint; false (with PCL_ERROR) if the box would leave the key range. */
-  bool adoptBoundingBoxToPoint(double x, double y, double z);
+  bool adoptBoundingBoxToPoint(double x, double y, double z) {
+    return table_.adoptBoundingBoxToPoint(x, y, z);
+  }
   /** Bumped by every change of the leaves, so that caches built from them know when they are stale. */
-  std::uint64_t version() const { return version_; }
+  std::uint64_t version() const { return table_.version(); }
   /** Calls visit(container) for every leaf, in no particular order. */
   template <typename Visit>
   void forEachLeaf(Visit&& visit) const {
-    if constexpr (kHoldsLeaves)
-      for (const auto& leaf : leaves_) visit(leaf.second.getContainer());
+    if constexpr (kHoldsLeaves) table_.forEachLeaf([&](Slot slot) { visit(nodes_[slot].getContainer()); });
   }
   /** Empties the leaves but keeps the bounding box (a new buffer of OctreePointCloudChangeDetector). */
   void clearLeaves() {
-    tree_.clear();
-    leaves_.clear();
-    last_.leaf = nullptr;
-    phantoms_.clear();
-    ++version_;
+    table_.clearLeaves();
+    nodes_.clear();
   }
   /**
    * The leaf pcl::octree's approxNearestSearch descends to: at each depth, the existing child whose centre
    * lies nearest to the point. nullptr if the descent meets an empty old root (where PCL asserts).
    */
-  const LeafNode* approxLeaf(const PointT& point) const;
+  const LeafNode* approxLeaf(const PointT& point) const {
+    return node(table_.approxLeaf(point.getVector3fMap()));
+  }
 
   PointCloudConstPtr input_;
   IndicesConstPtr indices_;
-  uindex_t depth_ = 0;
 
  private:
-  /** The cube at this level holding the tree key k, aligned on PCL's grid. */
-  LeafId cubeOf(const Key& k, std::uint32_t level) const;
-  /** Whether the cube holds an occupied cell or an empty old root. */
-  bool cubeHasContent(const LeafId& cube) const;
-  /**
-   * The leaf on the path to the tree key k, as PCL's descent finds it: the first leaf from the root down;
-   * `id` is its cube. Without one, `id` is where PCL would create it (at full depth without dynamic depth).
-   */
-  LeafNode* leafOnPath(const Key& k, LeafId& id) const;
-  /** createLeaf at a tree key; `id` tells which leaf holds it. */
-  LeafNode* createLeafAt(const Key& k, LeafId& id);
-  /** Calls visit(key) for each occupied voxel the ray crosses in the box, near to far, while it returns true.
-   */
-  template <typename Visit>
-  void walkRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, Visit&& visit) const;
+  /** The leaf node in this slot; nullptr for none. The occupancy octree's leaves share one empty node. */
+  LeafNode* node(Slot slot) const {
+    if (slot == OctreeLeafTable::kNoLeaf) return nullptr;
+    if constexpr (kHoldsLeaves) {
+      return &nodes_[slot];
+    } else {
+      static LeafNode empty_leaf;
+      return &empty_leaf;
+    }
+  }
+  /** The node of a slot the table gives: a new slot's container starts empty. */
+  LeafNode* slotNode(Slot slot, bool created);
   /** PCL's expandLeafNode: the leaf becomes a branch, its points go to new leaves one level down. */
-  void expandLeaf(const LeafId& id);
-  void getKeyBitSize();
-  /** PCL's branches, built from the leaves at the first walk after a change. */
-  std::shared_ptr<const BranchIndex> branchIndex() const;
-  std::shared_ptr<const BranchIndex> buildBranchIndex() const;
+  void expandLeaf(const LeafId& id, Slot slot);
 
   double epsilon_ = 0.0;
-  double resolution_;
-  double min_[3] = {0, 0, 0}, max_[3] = {0, 0, 0};
-  bool bounding_box_defined_ = false;
-  std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
-  FastOctTree tree_;
-  // Only when kHoldsLeaves. Mutable as PCL's nodes are: const lookups hand out leaves callers may fill.
-  mutable std::unordered_map<LeafId, LeafNode, LeafIdHash> leaves_;
-  /** The leaf the last point went to (a scan's next point often shares it); copies start without it. */
-  struct LastLeaf {
-    LastLeaf() = default;
-    LastLeaf(const LastLeaf&) {}
-    LastLeaf& operator=(const LastLeaf&) {
-      leaf = nullptr;
-      return *this;
-    }
-    LeafId id{};
-    LeafNode* leaf = nullptr;
-  } last_;
-  std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
-  std::uint64_t version_ = 0;
-  mutable detail::VersionCache<BranchIndex> branch_cache_;  // the branch index of the last walk
-  /**
-   * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
-   * only a deletion beneath it removes. These nested cubes (tree keys) keep getBranchCount exact.
-   */
-  struct Phantom {
-    Key min;
-    uindex_t level;
-  };
-  std::vector<Phantom> phantoms_;
+  OctreeLeafTable table_;
+  // The leaves' nodes by slot (a deque keeps them in place as it grows). Mutable as PCL's nodes are: const
+  // lookups hand out leaves callers may fill.
+  mutable std::deque<LeafNode> nodes_;
 };
 
 /** PCL's occupancy octree: its leaves are the tree's cells and hold nothing. */

@@ -159,7 +159,7 @@ class OctreePointCloudAdjacency : public OctreePointCloud<PointT, LeafContainerT
 
   /** Links the leaf to every leaf among the 27 voxels around its key, itself included, in PCL's order. */
   void computeNeighbors(const octree::OctreeKey& key, LeafContainerT* leaf) {
-    const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << this->depth_) - 1);
+    const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << this->getTreeDepth()) - 1);
     for (int dx = key.x > 0 ? -1 : 0; dx <= (key.x == last ? 0 : 1); ++dx)
       for (int dy = key.y > 0 ? -1 : 0; dy <= (key.y == last ? 0 : 1); ++dy)
         for (int dz = key.z > 0 ? -1 : 0; dz <= (key.z == last ? 0 : 1); ++dz)

@@ -39,8 +39,8 @@ class OctreePointCloudChangeDetector : public OctreePointCloud<PointT, LeafConta
                                         const uindex_t minPointsPerLeaf_arg = 0) const {
     for (auto it = this->leaf_depth_begin(); it != this->leaf_depth_end(); ++it) {
       const octree::OctreeKey& key = it.getCurrentOctreeKey();
-      const uindex_t level = this->depth_ - it.getCurrentOctreeDepth();
-      const octree::OctreeKey first_voxel(key.x << level, key.y << level, key.z << level);
+      const uindex_t level = this->getTreeDepth() - it.getCurrentOctreeDepth();
+      const octree::OctreeKey first_voxel = OctreeLeafTable::firstVoxel(key, level);
       if (previous_.getCell(this->pclKeyToTreeKey(first_voxel)) == CellState::Occupied) continue;
       const LeafContainerT& leaf = it.getLeafContainer();
       if (static_cast<uindex_t>(leaf.getSize()) >= minPointsPerLeaf_arg)

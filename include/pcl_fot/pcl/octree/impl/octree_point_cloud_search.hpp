@@ -89,7 +89,7 @@ OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::leavesAround(
   // A point keeps the voxel it was added to, whose key was computed in the box of that moment: after the
   // box grows, a key computed now may differ by one. One voxel more on each side finds them all.
   const double res = this->getResolution();
-  const std::int64_t last = (std::int64_t(1) << this->depth_) - 1;
+  const std::int64_t last = (std::int64_t(1) << this->getTreeDepth()) - 1;
   std::int64_t from[3], to[3];
   for (int a = 0; a < 3; ++a) {
     if (hi[a] < box_lo[a] - res || lo[a] > box_hi[a] + res) return leaves;

@@ -1,0 +1,248 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <pcl/octree/octree_key.h>
+#include <pcl/pcl_macros.h>
+#include <pcl/types.h>
+#include <Eigen/Core>
+
+#include <pcl_fot/detail/version_cache.h>
+#include <pcl_fot/tree/fast_oct_tree.h>
+
+namespace pcl {
+namespace fot {
+
+/**
+ * What the pcl::octree look-alikes share whatever their point type: PCL's bounding box and keys, the
+ * FastOctTree of occupied cells, and the table of leaves, which it keeps in step with the tree. A leaf is a
+ * slot number; the look-alike keeps its containers in a sequence indexed by slot (a removed leaf's slot is
+ * given to a later one). Without containers (the occupancy octree) the tree's cells are the leaves, all in
+ * slot 0. Every change of the leaves bumps version(), so caches built from them know when they are stale.
+ *
+ * Compiled once in the library: the look-alikes' templates hold only what touches points and containers.
+ */
+class PCL_EXPORTS OctreeLeafTable {
+ public:
+  using Slot = std::uint32_t;
+  static constexpr Slot kNoLeaf = ~Slot(0);
+
+  /** A leaf's cube: its lowest cell's tree key and its level (2^level cells per axis). */
+  struct LeafId {
+    Key corner;
+    std::uint32_t level;
+    bool operator==(const LeafId& o) const {
+      return corner.x == o.corner.x && corner.y == o.corner.y && corner.z == o.corner.z && level == o.level;
+    }
+  };
+  struct LeafIdHash {
+    std::size_t operator()(const LeafId& id) const;
+  };
+  /** PCL's branches: each one's cube, with the bit pattern of its children (bit i: child i exists). */
+  using BranchIndex = std::unordered_map<LeafId, std::uint8_t, LeafIdHash>;
+
+  /** One node of the octree pcl::octree would build. */
+  struct Node {
+    octree::OctreeKey key;  // as in PCL, only the bits of its depth
+    uindex_t depth;
+    std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf
+    bool leaf;
+  };
+
+  /** Which nodes a walk stops at. */
+  enum class Stops : std::uint8_t { All, Leaves, OneDepth };
+
+  /**
+   * Walks pcl::octree's nodes in the order of the PCL iterator it stands for: depth first (children in
+   * PCL's order) or breadth first, every node or only leaves or one depth, down to a maximum depth. It walks
+   * the branches as they were when it was made.
+   */
+  class PCL_EXPORTS NodeWalk {
+   public:
+    NodeWalk() = default;
+    NodeWalk(const OctreeLeafTable* table, bool depth_first, Stops stops, uindex_t max_depth);
+    /** On to the next node the walk stops at, or to the end. */
+    void advance();
+    bool atEnd() const { return at_end_; }
+    const Node& node() const { return node_; }
+    /** As PCL's iterators: equal when both are at their end, or on nodes of one key at one maximum depth. */
+    bool operator==(const NodeWalk& o) const {
+      if (at_end_ || o.at_end_) return at_end_ && o.at_end_;
+      return max_depth_ == o.max_depth_ && node_.key == o.node_.key;
+    }
+
+   private:
+    /** The node at this key and depth: a branch of the index, else a leaf. */
+    Node nodeAt(const octree::OctreeKey& key, uindex_t depth) const;
+
+    const OctreeLeafTable* table_ = nullptr;
+    std::shared_ptr<const BranchIndex> branches_;
+    bool depth_first_ = true;
+    Stops stops_ = Stops::All;
+    uindex_t max_depth_ = 0;
+    Node node_{};
+    bool at_end_ = true;
+    // The nodes still to visit: depth first takes the last (children pushed last to first), breadth first
+    // the first.
+    std::deque<Node> pending_;
+  };
+
+  /** Throws std::invalid_argument for a resolution CellGrid refuses (PCL asserts). */
+  OctreeLeafTable(double resolution, bool holds_leaves);
+
+  /** PCL's child `child` (0..7, bit 2 x, bit 1 y, bit 0 z) of the node at key, one depth down. */
+  static octree::OctreeKey childKey(const octree::OctreeKey& key, unsigned child) {
+    return octree::OctreeKey(key.x << 1 | (child >> 2 & 1u), key.y << 1 | (child >> 1 & 1u),
+                             key.z << 1 | (child & 1u));
+  }
+  /** The PCL key of the first voxel of the node at key, `level` depths above the voxels. */
+  static octree::OctreeKey firstVoxel(const octree::OctreeKey& key, std::uint32_t level) {
+    return octree::OctreeKey(key.x << level, key.y << level, key.z << level);
+  }
+
+  // The bounding box and PCL's keys.
+  /** Only while there are no leaves, as in PCL; false (with PCL_ERROR) otherwise or for a bad resolution. */
+  bool setResolution(double resolution);
+  double resolution() const { return resolution_; }
+  uindex_t depth() const { return depth_; }
+  bool boxDefined() const { return bounding_box_defined_; }
+  void getBoundingBox(double min[3], double max[3]) const;
+  /** PCL's defineBoundingBox: only while empty, finite and at most 2^29 cells per axis (else PCL_ERROR). */
+  void defineBoundingBox(const double min[3], const double max[3]);
+  /** PCL's adoptBoundingBoxToPoint; false (with PCL_ERROR) if the box would leave the key range. */
+  bool adoptBoundingBoxToPoint(double x, double y, double z);
+  bool isPointWithinBoundingBox(double x, double y, double z) const {
+    return !(x < min_[0] || y < min_[1] || z < min_[2] || x >= max_[0] || y >= max_[1] || z >= max_[2]);
+  }
+  /** PCL's key: (point - min) / resolution, truncated; only for points inside the box. */
+  octree::OctreeKey pclKey(double x, double y, double z) const;
+  Key pclKeyToTreeKey(const octree::OctreeKey& k) const {
+    return Key{std::int32_t(k.x) + offset_[0], std::int32_t(k.y) + offset_[1],
+               std::int32_t(k.z) + offset_[2]};
+  }
+  /** PCL's genVoxelCenterFromOctreeKey: the centre of the node at this depth and key, in double. */
+  void voxelCenter(const octree::OctreeKey& key, uindex_t depth, double center[3]) const;
+  double voxelSquaredSideLen(uindex_t depth) const;
+  /** The bounds of the node's cube, at its depth, as PCL computes them. */
+  void voxelBounds(const octree::OctreeKey& key, uindex_t depth, Eigen::Vector3f& min_pt,
+                   Eigen::Vector3f& max_pt) const;
+
+  // The leaves.
+  bool holdsLeaves() const { return holds_leaves_; }
+  std::size_t leafCount() const {
+    return holds_leaves_ ? leaves_.size() : std::size_t(tree_.getOccupiedCount());
+  }
+  /** The branch nodes pcl::octree would hold for these voxels, its root included. */
+  std::size_t branchCount() const { return branchIndex()->size(); }
+  std::uint64_t version() const { return version_; }
+  const FastOctTree& tree() const { return tree_; }
+  /** PCL's dynamic depth (0: off); only while there are no leaves (else PCL_ERROR). */
+  void enableDynamicDepth(std::size_t max_objs_per_leaf);
+  std::size_t maxObjsPerLeaf() const { return max_objs_per_leaf_; }
+
+  /** The leaf holding the voxel at this PCL key (the first leaf on its path); kNoLeaf if none. */
+  Slot findLeaf(const octree::OctreeKey& key) const;
+  /** The leaf at this depth and key (a node's key, as iterators give it); kNoLeaf if none. */
+  Slot leafAt(const octree::OctreeKey& key, uindex_t depth) const;
+  /**
+   * The leaf holding the voxel at this PCL key, created as PCL's createLeaf if there is none (its cell is
+   * marked). `created` tells whether the slot is new: its container must start empty.
+   */
+  Slot createLeaf(const octree::OctreeKey& key, bool& created);
+  /**
+   * The leaf a point at tree key k goes to, created if there is none; `id` is its cube. Under dynamic depth
+   * the point's cell is not marked yet (a leaf about to split must not see it): markCell once the point is
+   * in.
+   */
+  Slot leafForPoint(const Key& k, LeafId& id, bool& created);
+  void markCell(const Key& k) { tree_.setCell(k, CellState::Occupied); }
+  /** The leaf of this cube, created if there is none (PCL's expandLeafNode fills new leaves this way). */
+  Slot leafOfCube(const LeafId& id, bool& created);
+  /** Takes a leaf out of the table (PCL's expandLeafNode: its points go to new leaves); its slot is freed. */
+  void eraseLeaf(const LeafId& id);
+  /** The cube at this level holding the tree key k, aligned on PCL's grid. */
+  LeafId cubeOf(const Key& k, std::uint32_t level) const;
+  /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
+  bool existLeaf(uindex_t x, uindex_t y, uindex_t z) const;
+  /** Deletes the leaf holding the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
+  void removeLeaf(uindex_t x, uindex_t y, uindex_t z);
+  /** Empties the leaves but keeps the bounding box. */
+  void clearLeaves();
+  /** Empties the leaves and resets the bounding box; the depth stays, as in PCL. */
+  void clear();
+  /** Calls visit(slot) for every leaf, in no particular order. */
+  template <typename Visit>
+  void forEachLeaf(Visit&& visit) const {
+    for (const auto& leaf : leaves_) visit(leaf.second);
+  }
+
+  // Walks.
+  /** The branches of pcl::octree, built from the leaves at the first walk after a change. */
+  std::shared_ptr<const BranchIndex> branchIndex() const;
+  /**
+   * The leaf pcl::octree's approxNearestSearch descends to: at each depth, the existing child whose centre
+   * lies nearest to the point (in float, as PCL). kNoLeaf if the descent meets an empty old root.
+   */
+  Slot approxLeaf(const Eigen::Vector3f& point) const;
+  /**
+   * Calls visit(key) for each occupied voxel a ray from `origin` along `direction` crosses in the box, near
+   * to far, while it returns true.
+   */
+  void walkRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+               const std::function<bool(const octree::OctreeKey&)>& visit) const;
+  /**
+   * PCL's getApproxIntersectedVoxelCentersBySegment: samples the segment every resolution * precision and
+   * calls visit(key) for each sample in the box whose voxel differs from the last one's. False (with
+   * PCL_ERROR) for a segment it refuses.
+   */
+  bool walkSegment(const Eigen::Vector3f& origin, const Eigen::Vector3f& end, float precision,
+                   const std::function<void(const octree::OctreeKey&)>& visit) const;
+
+ private:
+  /** Whether the cube holds an occupied cell or an empty old root. */
+  bool cubeHasContent(const LeafId& cube) const;
+  /** The first leaf on the path to tree key k, as PCL's descent finds it; `id` is its cube, or where PCL
+   * would create it. */
+  Slot leafOnPath(const Key& k, LeafId& id) const;
+  /** A new leaf of this cube in a free slot. */
+  Slot addLeaf(const LeafId& id);
+  void getKeyBitSize();
+  std::shared_ptr<const BranchIndex> buildBranchIndex() const;
+
+  double resolution_;
+  bool holds_leaves_;
+  double min_[3] = {0, 0, 0}, max_[3] = {0, 0, 0};
+  uindex_t depth_ = 0;
+  bool bounding_box_defined_ = false;
+  std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
+  FastOctTree tree_;
+  std::unordered_map<LeafId, Slot, LeafIdHash> leaves_;  // only when holds_leaves_
+  std::vector<Slot> free_slots_;
+  Slot next_slot_ = 0;
+  /** The leaf the last point went to (a scan's next point often shares it). */
+  LeafId last_id_{};
+  Slot last_slot_ = kNoLeaf;
+  std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
+  std::uint64_t version_ = 0;
+  mutable detail::VersionCache<BranchIndex> branch_cache_;  // the branch index of the last walk
+  /**
+   * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
+   * only a deletion beneath it removes. These nested cubes (tree keys) keep branchCount exact.
+   */
+  struct Phantom {
+    Key min;
+    uindex_t level;
+  };
+  std::vector<Phantom> phantoms_;
+};
+
+}  // namespace fot
+}  // namespace pcl

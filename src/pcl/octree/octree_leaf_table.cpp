@@ -1,0 +1,595 @@
+#include <pcl_fot/pcl/octree/octree_leaf_table.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include <pcl/console/print.h>
+
+#include <pcl_fot/mapping/ray_traversal.h>
+#include <pcl_fot/tree/accessor.h>
+
+namespace pcl {
+namespace fot {
+namespace {
+
+/** The deepest box the adapter follows PCL to: 2^29 cells per axis keeps tree keys in range. */
+constexpr uindex_t kMaxPclDepth = 29;
+
+}  // namespace
+
+std::size_t OctreeLeafTable::LeafIdHash::operator()(const LeafId& id) const {
+  std::uint64_t h = std::uint64_t(std::uint32_t(id.corner.x)) * 0x9E3779B97F4A7C15ULL;
+  h ^= (std::uint64_t(std::uint32_t(id.corner.y)) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4FULL;
+  h ^= (std::uint64_t(std::uint32_t(id.corner.z)) ^ (std::uint64_t(id.level) << 40)) * 0x165667B19E3779F9ULL;
+  return std::size_t(h ^ (h >> 29));
+}
+
+OctreeLeafTable::OctreeLeafTable(double resolution, bool holds_leaves)
+    : resolution_(resolution), holds_leaves_(holds_leaves), tree_(resolution) {
+  max_[0] = max_[1] = max_[2] = resolution;
+}
+
+bool OctreeLeafTable::setResolution(double resolution) {
+  if (leafCount() != 0) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::setResolution] The octree must be empty to change its resolution.\n");
+    return false;
+  }
+  const std::string why = CellGrid::whyInvalid(resolution, 0.0, 0.0, 0.0);
+  if (!why.empty()) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::setResolution] Refused: %s.\n", why.c_str());
+    return false;
+  }
+  resolution_ = resolution;
+  tree_ = FastOctTree(resolution);
+  getKeyBitSize();
+  return true;
+}
+
+void OctreeLeafTable::getBoundingBox(double min[3], double max[3]) const {
+  std::copy(min_, min_ + 3, min);
+  std::copy(max_, max_ + 3, max);
+}
+
+octree::OctreeKey OctreeLeafTable::pclKey(double x, double y, double z) const {
+  // A point just inside the box's far face can round to one voxel past it; pcl::octree asserts there.
+  const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << depth_) - 1);
+  return octree::OctreeKey(std::min(static_cast<uindex_t>((x - min_[0]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((y - min_[1]) / resolution_), last),
+                           std::min(static_cast<uindex_t>((z - min_[2]) / resolution_), last));
+}
+
+void OctreeLeafTable::voxelCenter(const octree::OctreeKey& key, uindex_t depth, double center[3]) const {
+  const double side = resolution_ * static_cast<double>(std::uint64_t(1) << (depth_ - depth));
+  const uindex_t k[3] = {key.x, key.y, key.z};
+  for (int a = 0; a < 3; ++a) center[a] = (static_cast<double>(k[a]) + 0.5f) * side + min_[a];
+}
+
+double OctreeLeafTable::voxelSquaredSideLen(uindex_t depth) const {
+  const double side = std::ldexp(resolution_, int(depth_) - int(depth));
+  return side * side;
+}
+
+void OctreeLeafTable::voxelBounds(const octree::OctreeKey& key, uindex_t depth, Eigen::Vector3f& min_pt,
+                                  Eigen::Vector3f& max_pt) const {
+  const double side = std::ldexp(resolution_, int(depth_) - int(depth));
+  const uindex_t k[3] = {key.x, key.y, key.z};
+  for (int a = 0; a < 3; ++a) {
+    min_pt(a) = static_cast<float>(static_cast<double>(k[a]) * side + min_[a]);
+    max_pt(a) = static_cast<float>(static_cast<double>(k[a] + 1) * side + min_[a]);
+  }
+}
+
+void OctreeLeafTable::getKeyBitSize() {
+  // PCL's arithmetic, step for step, so that the box comes out bit for bit the same.
+  const float min_value = std::numeric_limits<float>::epsilon();
+  uindex_t max_voxels = 2;
+  for (int a = 0; a < 3; ++a)
+    max_voxels =
+        std::max(max_voxels, static_cast<uindex_t>(std::ceil((max_[a] - min_[a] - min_value) / resolution_)));
+  depth_ = std::max<uindex_t>(
+      std::min<uindex_t>(octree::OctreeKey::maxDepth, std::ceil(std::log2(max_voxels) - min_value)), 0);
+  const double side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_;
+  for (int a = 0; a < 3; ++a) {
+    if (leafCount() == 0) {
+      const double oversize = (side - (max_[a] - min_[a])) / 2.0;
+      if (oversize > min_value) {
+        min_[a] -= oversize;
+        max_[a] += oversize;
+      }
+    } else {
+      max_[a] = min_[a] + side;
+    }
+  }
+}
+
+bool OctreeLeafTable::adoptBoundingBoxToPoint(double x, double y, double z) {
+  const float min_value = std::numeric_limits<float>::epsilon();
+  const double p[3] = {x, y, z};
+  // A point that does not fit leaves the box as it was, not grown part of the way.
+  const auto box = std::make_tuple(std::array<double, 3>{min_[0], min_[1], min_[2]},
+                                   std::array<double, 3>{max_[0], max_[1], max_[2]}, depth_, offset_);
+  const std::size_t phantoms = phantoms_.size();
+  while (true) {
+    bool lower[3], upper[3];
+    for (int a = 0; a < 3; ++a) {
+      lower[a] = p[a] < min_[a];
+      upper[a] = p[a] >= max_[a];
+    }
+    const bool violated = lower[0] || lower[1] || lower[2] || upper[0] || upper[1] || upper[2];
+    if (bounding_box_defined_ && !violated) return true;
+    if (!bounding_box_defined_) {
+      // The first point: a box of ±res/2 around it.
+      for (int a = 0; a < 3; ++a) {
+        min_[a] = p[a] - resolution_ / 2;
+        max_[a] = p[a] + resolution_ / 2;
+      }
+      getKeyBitSize();
+      offset_ = {0, 0, 0};
+      phantoms_.clear();
+      bounding_box_defined_ = true;
+      continue;
+    }
+    if (depth_ >= kMaxPclDepth) {
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud] The point (%g, %g, %g) would grow the octree beyond 2^%u cells per "
+          "axis; it is not added.\n",
+          x, y, z, kMaxPclDepth);
+      const auto& [lo, hi, depth, offset] = box;
+      std::copy(lo.begin(), lo.end(), min_);
+      std::copy(hi.begin(), hi.end(), max_);
+      depth_ = depth;
+      offset_ = offset;
+      phantoms_.resize(phantoms);
+      return false;
+    }
+    // A new root: the box doubles, downwards on every axis the point does not exceed upwards.
+    if (leafCount() == 0)  // PCL keeps the empty old root as a branch
+      phantoms_.push_back({Key{offset_[0], offset_[1], offset_[2]}, depth_});
+    const double side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_;
+    for (int a = 0; a < 3; ++a)
+      if (!upper[a]) {
+        min_[a] -= side;
+        offset_[a] -= std::int32_t(1) << depth_;
+      }
+    ++depth_;
+    const double new_side = static_cast<double>(std::uint64_t(1) << depth_) * resolution_ - min_value;
+    for (int a = 0; a < 3; ++a) max_[a] = min_[a] + new_side;
+  }
+}
+
+void OctreeLeafTable::defineBoundingBox(const double min[3], const double max[3]) {
+  if (leafCount() != 0) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The octree must be empty to define its box.\n");
+    return;
+  }
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(min[a]) || !std::isfinite(max[a])) {
+      PCL_ERROR("[pcl::fot::OctreePointCloud::defineBoundingBox] The box must be finite.\n");
+      return;
+    }
+  const double saved_min[3] = {min_[0], min_[1], min_[2]}, saved_max[3] = {max_[0], max_[1], max_[2]};
+  const uindex_t saved_depth = depth_;
+  for (int a = 0; a < 3; ++a) {
+    min_[a] = std::min(min[a], max[a]);
+    max_[a] = std::max(min[a], max[a]);
+  }
+  getKeyBitSize();
+  if (depth_ > kMaxPclDepth) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::defineBoundingBox] The box spans more than 2^%u cells per axis.\n",
+        kMaxPclDepth);
+    std::copy(saved_min, saved_min + 3, min_);
+    std::copy(saved_max, saved_max + 3, max_);
+    depth_ = saved_depth;
+    return;
+  }
+  offset_ = {0, 0, 0};
+  phantoms_.clear();
+  bounding_box_defined_ = true;
+}
+
+void OctreeLeafTable::enableDynamicDepth(std::size_t max_objs_per_leaf) {
+  if (leafCount() != 0) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud::enableDynamicDepth] The octree must be empty.\n");
+    return;
+  }
+  max_objs_per_leaf_ = max_objs_per_leaf;
+}
+
+OctreeLeafTable::LeafId OctreeLeafTable::cubeOf(const Key& k, std::uint32_t level) const {
+  const auto align = [&](std::int32_t v, std::int32_t offset) {
+    return std::int32_t(((std::uint32_t(v - offset) >> level) << level) + std::uint32_t(offset));
+  };
+  return LeafId{Key{align(k.x, offset_[0]), align(k.y, offset_[1]), align(k.z, offset_[2])}, level};
+}
+
+bool OctreeLeafTable::cubeHasContent(const LeafId& cube) const {
+  const std::int32_t last = std::int32_t((std::int64_t(1) << cube.level) - 1);
+  const Key hi{cube.corner.x + last, cube.corner.y + last, cube.corner.z + last};
+  for (const Phantom& ph : phantoms_)
+    if (ph.level <= cube.level && ph.min.x >= cube.corner.x && ph.min.x <= hi.x &&
+        ph.min.y >= cube.corner.y && ph.min.y <= hi.y && ph.min.z >= cube.corner.z && ph.min.z <= hi.z)
+      return true;
+  bool occupied = false;
+  tree_.forEachRegionInBox(cube.corner, hi, [&](const Region& r) {
+    occupied = r.state == CellState::Occupied;
+    return !occupied;
+  });
+  return occupied;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::leafOnPath(const Key& k, LeafId& id) const {
+  if (max_objs_per_leaf_ == 0) {
+    id = LeafId{k, 0};
+    const auto it = leaves_.find(id);
+    return it == leaves_.end() ? kNoLeaf : it->second;
+  }
+  // PCL's descent: the root is a branch; below it, the first leaf, or the first node missing.
+  for (std::uint32_t level = depth_ - 1;; --level) {
+    id = cubeOf(k, level);
+    const auto it = leaves_.find(id);
+    if (it != leaves_.end()) return it->second;
+    if (level == 0 || !cubeHasContent(id)) return kNoLeaf;
+  }
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
+  Slot slot = next_slot_;
+  if (!free_slots_.empty()) {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+  } else {
+    ++next_slot_;
+  }
+  leaves_.emplace(id, slot);
+  return slot;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bool& created) {
+  ++version_;
+  created = false;
+  if (!holds_leaves_) {
+    tree_.setCell(k, CellState::Occupied);
+    id = LeafId{k, 0};
+    return 0;
+  }
+  if (max_objs_per_leaf_ == 0) {
+    id = LeafId{k, 0};
+    if (last_slot_ != kNoLeaf && last_id_ == id) return last_slot_;
+    const auto it = leaves_.find(id);
+    Slot slot = it == leaves_.end() ? kNoLeaf : it->second;
+    if (slot == kNoLeaf) {
+      slot = addLeaf(id);
+      created = true;
+      tree_.setCell(k, CellState::Occupied);
+    }
+    last_id_ = id;
+    last_slot_ = slot;
+    return slot;
+  }
+  const Slot slot = leafOnPath(k, id);
+  if (slot != kNoLeaf) return slot;
+  created = true;
+  return addLeaf(id);
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::createLeaf(const octree::OctreeKey& key, bool& created) {
+  const Key k = pclKeyToTreeKey(key);
+  LeafId id;
+  const Slot slot = leafForPoint(k, id, created);
+  if (max_objs_per_leaf_ != 0) markCell(k);
+  return slot;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::leafOfCube(const LeafId& id, bool& created) {
+  const auto it = leaves_.find(id);
+  created = it == leaves_.end();
+  return created ? addLeaf(id) : it->second;
+}
+
+void OctreeLeafTable::eraseLeaf(const LeafId& id) {
+  const auto it = leaves_.find(id);
+  if (it == leaves_.end()) return;
+  ++version_;
+  free_slots_.push_back(it->second);
+  if (last_slot_ == it->second) last_slot_ = kNoLeaf;
+  leaves_.erase(it);
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::findLeaf(const octree::OctreeKey& key) const {
+  if (!holds_leaves_) return leafAt(key, depth_);
+  LeafId id;
+  return leafOnPath(pclKeyToTreeKey(key), id);
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::leafAt(const octree::OctreeKey& key, uindex_t depth) const {
+  const std::uint32_t level = depth_ - depth;
+  const Key corner = pclKeyToTreeKey(firstVoxel(key, level));
+  if (!holds_leaves_)  // the occupancy octree's leaves are its cells
+    return level == 0 && tree_.getCell(corner) == CellState::Occupied ? 0 : kNoLeaf;
+  const auto it = leaves_.find(LeafId{corner, level});
+  return it == leaves_.end() ? kNoLeaf : it->second;
+}
+
+bool OctreeLeafTable::existLeaf(uindex_t x, uindex_t y, uindex_t z) const {
+  if (((x | y | z) >> depth_) != 0) return false;
+  return findLeaf(octree::OctreeKey(x, y, z)) != kNoLeaf;
+}
+
+void OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
+  if (((x | y | z) >> depth_) != 0) return;
+  const Key target = pclKeyToTreeKey(octree::OctreeKey(x, y, z));
+  ++version_;
+  if (holds_leaves_) {
+    // The first leaf on the path goes, with every cell of its cube.
+    LeafId id;
+    if (leafOnPath(target, id) != kNoLeaf) {
+      const std::int32_t last = std::int32_t((std::int64_t(1) << id.level) - 1);
+      eraseLeaf(id);
+      tree_.setBox(id.corner, Key{id.corner.x + last, id.corner.y + last, id.corner.z + last},
+                   CellState::Unknown);
+    }
+  } else {
+    tree_.eraseCell(target);
+  }
+  // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
+  // so the smallest goes first, and each larger one only once nothing is left inside it.
+  std::sort(phantoms_.begin(), phantoms_.end(),
+            [](const Phantom& a, const Phantom& b) { return a.level < b.level; });
+  while (!phantoms_.empty()) {
+    const Phantom& ph = phantoms_.front();
+    const std::int32_t last = std::int32_t((std::int64_t(1) << ph.level) - 1);
+    const Key hi{ph.min.x + last, ph.min.y + last, ph.min.z + last};
+    const bool on_path = target.x >= ph.min.x && target.x <= hi.x && target.y >= ph.min.y &&
+                         target.y <= hi.y && target.z >= ph.min.z && target.z <= hi.z;
+    bool holds_voxels = false;
+    if (on_path)
+      tree_.forEachRegionInBox(ph.min, hi, [&](const Region& r) {
+        holds_voxels = r.state == CellState::Occupied;
+        return !holds_voxels;
+      });
+    if (!on_path || holds_voxels) break;
+    phantoms_.erase(phantoms_.begin());
+  }
+}
+
+void OctreeLeafTable::clearLeaves() {
+  tree_.clear();
+  leaves_.clear();
+  free_slots_.clear();
+  next_slot_ = 0;
+  last_slot_ = kNoLeaf;
+  phantoms_.clear();
+  ++version_;
+}
+
+void OctreeLeafTable::clear() {
+  min_[0] = min_[1] = min_[2] = max_[0] = max_[1] = max_[2] = 0;
+  bounding_box_defined_ = false;
+  clearLeaves();
+}
+
+std::shared_ptr<const OctreeLeafTable::BranchIndex> OctreeLeafTable::branchIndex() const {
+  return branch_cache_.get(version_, [&] { return buildBranchIndex(); });
+}
+
+std::shared_ptr<const OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex() const {
+  auto index = std::make_shared<BranchIndex>();
+  const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
+  index->emplace(root, 0);
+  // Each node marks itself in its parent; a parent met before already has its ancestors marked.
+  const auto addNode = [&](LeafId node) {
+    for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
+      const LeafId parent = cubeOf(node.corner, level);
+      const auto bit = [&](std::int32_t v, std::int32_t offset) {
+        return (std::uint32_t(v - offset) >> node.level) & 1u;
+      };
+      const unsigned child = bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
+                             bit(node.corner.z, offset_[2]);
+      const auto [it, inserted] = index->try_emplace(parent, 0);
+      it->second |= std::uint8_t(1u << child);
+      if (!inserted) return;
+      node = parent;
+    }
+  };
+  if (holds_leaves_)
+    for (const auto& leaf : leaves_) addNode(leaf.first);
+  else
+    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { addNode(LeafId{k, 0}); });
+  // PCL keeps the empty old roots of a box grown before any point as branches.
+  for (const Phantom& ph : phantoms_) {
+    const LeafId cube{ph.min, std::uint32_t(ph.level)};
+    index->try_emplace(cube, 0);
+    addNode(cube);
+  }
+  return index;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::approxLeaf(const Eigen::Vector3f& point) const {
+  const auto branches = branchIndex();
+  octree::OctreeKey key(0, 0, 0);
+  std::uint8_t children = branches->at(cubeOf(pclKeyToTreeKey(key), depth_));
+  for (uindex_t depth = 1; depth <= depth_; ++depth) {
+    double nearest = std::numeric_limits<double>::max();
+    octree::OctreeKey nearest_key;
+    for (unsigned c = 0; c < 8; ++c) {
+      if (!(children >> c & 1u)) continue;
+      const octree::OctreeKey child = childKey(key, c);
+      double center[3];
+      voxelCenter(child, depth, center);
+      const Eigen::Vector3f centre = Eigen::Vector3d(center[0], center[1], center[2]).cast<float>();
+      const double d = (centre - point).squaredNorm();  // in float, as PCL
+      if (d >= nearest) continue;
+      nearest = d;
+      nearest_key = child;
+    }
+    if (nearest == std::numeric_limits<double>::max()) return kNoLeaf;  // an empty old root: PCL asserts
+    const std::uint32_t level = depth_ - depth;
+    const auto it = branches->find(LeafId{pclKeyToTreeKey(firstVoxel(nearest_key, level)), level});
+    if (it == branches->end()) return leafAt(nearest_key, depth);
+    key = nearest_key;
+    children = it->second;
+  }
+  return kNoLeaf;
+}
+
+bool OctreeLeafTable::walkSegment(const Eigen::Vector3f& origin, const Eigen::Vector3f& end, float precision,
+                                  const std::function<void(const octree::OctreeKey&)>& visit) const {
+  // PCL's walk in small float steps; keys are only taken inside the box, where PCL's are defined.
+  const float step_size = static_cast<float>(resolution_) * precision;
+  if (!(end - origin).allFinite() || !(step_size > 0.0f) || !std::isfinite(step_size)) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] The segment must "
+        "be finite and the precision positive.\n");
+    return false;
+  }
+  Eigen::Vector3f direction = end - origin;
+  const float norm = direction.norm();
+  direction.normalize();
+  const double nsteps = std::max(1.0, std::floor(double(norm / step_size)));
+  octree::OctreeKey prev_key;
+  bool have_prev = false;
+  auto add = [&](const Eigen::Vector3f& p) {
+    if (!isPointWithinBoundingBox(p.x(), p.y(), p.z())) return;
+    const octree::OctreeKey key = pclKey(p.x(), p.y(), p.z());
+    if (have_prev && key == prev_key) return;
+    prev_key = key;
+    have_prev = true;
+    visit(key);
+  };
+  // Only the steps near the part of the segment inside the box can add a voxel: a far end costs nothing.
+  double t_in = 0.0, t_out = norm;
+  for (int a = 0; a < 3; ++a) {
+    const double o = origin[a], d = direction[a];
+    if (d == 0.0) {
+      if (o < min_[a] || o >= max_[a]) t_in = t_out + 1.0;
+      continue;
+    }
+    double t0 = (min_[a] - o) / d, t1 = (max_[a] - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (bounding_box_defined_ && t_in <= t_out) {
+    // A margin for the float rounding of the samples, which grows with their coordinates.
+    const double slack = 2.0 + (double(norm) + origin.cwiseAbs().sum()) * 1e-6 / step_size;
+    const double first = std::max(0.0, std::floor(t_in / step_size - slack));
+    const double last = std::min(nsteps, std::ceil(t_out / step_size + slack));
+    if (last - first > 0x1p32 || last > 0x1p53) {
+      PCL_ERROR(
+          "[pcl::fot::OctreePointCloud::getApproxIntersectedVoxelCentersBySegment] Refused: %g steps "
+          "at this precision.\n",
+          last - first);
+      return false;
+    }
+    for (auto i = std::uint64_t(first); i < std::uint64_t(last); ++i)
+      add(origin + (direction * step_size * static_cast<float>(i)));
+  }
+  add(end);
+  return true;
+}
+
+void OctreeLeafTable::walkRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+                              const std::function<bool(const octree::OctreeKey&)>& visit) const {
+  const double norm = direction.cast<double>().norm();
+  if (!bounding_box_defined_ || !(norm > 0.0) || !std::isfinite(norm) || !origin.allFinite()) return;
+  // Clip the ray to the box (slab test), then walk its cells from the entry on.
+  double t_in = 0.0, t_out = std::numeric_limits<double>::infinity();
+  double dir[3];
+  for (int a = 0; a < 3; ++a) {
+    dir[a] = double(direction[a]) / norm;
+    if (dir[a] == 0.0) {
+      if (origin[a] < min_[a] || origin[a] >= max_[a]) return;
+      continue;
+    }
+    double t0 = (min_[a] - origin[a]) / dir[a], t1 = (max_[a] - origin[a]) / dir[a];
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (t_in >= t_out) return;
+  const std::int64_t cells = std::int64_t(1) << depth_;
+  std::int32_t start[3];
+  double rel[3];
+  for (int a = 0; a < 3; ++a) {
+    const double entry = origin[a] + t_in * dir[a];
+    const double k = std::floor((entry - min_[a]) / resolution_);
+    start[a] = std::int32_t(std::min<double>(std::max<double>(k, 0.0), double(cells - 1)));
+    rel[a] = double(origin[a]) - min_[a];
+  }
+  const CellGrid box_grid(resolution_);  // PCL's frame: keys counted from the box's lower corner
+  RayWalker walker(box_grid, Key{start[0], start[1], start[2]}, rel, dir);
+  ConstAccessor cells_of(tree_);
+  const NodeWord* words = tree_.words();
+  for (std::int64_t budget = 3 * cells + 3; budget > 0;) {
+    const Key k = walker.key();
+    if (k.x < 0 || k.y < 0 || k.z < 0 || k.x >= cells || k.y >= cells || k.z >= cells) break;
+    const octree::OctreeKey pk(uindex_t(k.x), uindex_t(k.y), uindex_t(k.z));
+    const Key key = pclKeyToTreeKey(pk);
+    const unsigned level = cells_of.locatePath(key);  // 0: outside the tree's root, where nothing is
+    const TreeCoord c(key);
+    const bool occupied =
+        level > 0 && node::state(words[cells_of.pathOffset(level)], c.octant(level)) == CellState::Occupied;
+    if (occupied && !visit(pk)) break;
+    // An empty octant, 2^(level-1) cells per axis, is crossed without reading the tree again: the same
+    // steps, so the same cells afterwards.
+    const unsigned span = occupied || level == 0 ? 0 : level - 1;
+    for (bool inside = true; inside && budget > 0; --budget) {
+      walker.step();
+      const Key w = walker.key();
+      const TreeCoord n(Key{w.x + offset_[0], w.y + offset_[1], w.z + offset_[2]});
+      inside = (((n[0] ^ c[0]) | (n[1] ^ c[1]) | (n[2] ^ c[2])) >> span) == 0;
+    }
+  }
+}
+
+OctreeLeafTable::NodeWalk::NodeWalk(const OctreeLeafTable* table, bool depth_first, Stops stops,
+                                    uindex_t max_depth)
+    : table_(table),
+      branches_(table->branchIndex()),
+      depth_first_(depth_first),
+      stops_(stops),
+      max_depth_(max_depth) {
+  pending_.push_back(nodeAt(octree::OctreeKey(0, 0, 0), 0));
+  at_end_ = false;
+  advance();
+}
+
+OctreeLeafTable::Node OctreeLeafTable::NodeWalk::nodeAt(const octree::OctreeKey& key, uindex_t depth) const {
+  const std::uint32_t level = table_->depth_ - depth;
+  const auto it = branches_->find(LeafId{table_->pclKeyToTreeKey(firstVoxel(key, level)), level});
+  return it != branches_->end() ? Node{key, depth, it->second, false} : Node{key, depth, 0, true};
+}
+
+void OctreeLeafTable::NodeWalk::advance() {
+  const uindex_t limit = std::min(max_depth_, table_->depth_);
+  while (!pending_.empty()) {
+    if (depth_first_) {
+      node_ = pending_.back();
+      pending_.pop_back();
+    } else {
+      node_ = pending_.front();
+      pending_.pop_front();
+    }
+    if (!node_.leaf && node_.depth < limit) {
+      // Children in PCL's order: depth first pushes them last to first, so the first comes out first.
+      for (unsigned i = 0; i < 8; ++i) {
+        const unsigned c = depth_first_ ? 7 - i : i;
+        if (node_.children >> c & 1u) pending_.push_back(nodeAt(childKey(node_.key, c), node_.depth + 1));
+      }
+    }
+    if (stops_ == Stops::All || (stops_ == Stops::Leaves && node_.leaf) ||
+        (stops_ == Stops::OneDepth && node_.depth == max_depth_))
+      return;
+  }
+  at_end_ = true;
+}
+
+}  // namespace fot
+}  // namespace pcl
