@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include <pcl/common/point_tests.h>
 #include <pcl/octree/octree_search.h>
@@ -333,4 +335,70 @@ TEST(OctreeSearchAgreement, BadInputGetsAnEmptyAnswer) {
   // And it still answers.
   EXPECT_EQ(ours.nearestKSearch(PointXYZ(0.5f, 0.5f, 0.5f), 3, indices, distances), 3u);
   EXPECT_EQ(ours.radiusSearch(PointXYZ(0.5f, 0.5f, 0.5f), 10.0, indices, distances), 100u);
+}
+
+namespace {
+
+/** Our octree's nodes in depth-first order: each one's key, depth and child pattern. */
+std::vector<std::tuple<pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, char>> nodesOf(
+    const Ours& octree) {
+  std::vector<std::tuple<pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, char>> nodes;
+  for (auto it = octree.begin(); it != octree.end(); ++it) {
+    const auto& k = it.getCurrentOctreeKey();
+    nodes.emplace_back(k.x, k.y, k.z, it.getCurrentOctreeDepth(), it.getNodeConfiguration());
+  }
+  return nodes;
+}
+
+}  // namespace
+
+// The k-NN index and the branch index follow single adds and voxel deletions in place: after every step the
+// answers equal those of a copy of the octree (a copy builds its indices afresh), and pcl::octree's after the
+// same steps.
+TEST(OctreeSearchAgreement, InterleavedAddsDeletionsAndSearchesEqualAFreshBuild) {
+  for (const std::size_t max_per_leaf : {0, 4}) {
+    Cloud::Ptr cloud(new Cloud), ref_cloud(new Cloud);  // each octree appends to its own
+    Ours ours(0.25);
+    Reference ref(0.25);
+    ours.setInputCloud(cloud);
+    ref.setInputCloud(ref_cloud);
+    if (max_per_leaf) {
+      ours.enableDynamicDepth(max_per_leaf);
+      ref.enableDynamicDepth(max_per_leaf);
+    }
+    std::mt19937 rng(17 + unsigned(max_per_leaf));
+    std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
+    for (int step = 0; step < 400; ++step) {
+      const PointXYZ p(coordinate(rng), coordinate(rng), 0.5f * coordinate(rng));
+      if (step % 9 == 8) {
+        const PointXYZ victim = (*cloud)[rng() % cloud->size()];
+        ours.deleteVoxelAtPoint(victim);
+        ref.deleteVoxelAtPoint(victim);
+      } else {
+        ours.addPointToCloud(p, cloud);
+        ref.addPointToCloud(p, ref_cloud);
+      }
+      if (ours.getLeafCount() == 0) continue;
+      const Ours fresh(ours);
+      ASSERT_EQ(ours.getBranchCount(), ref.getBranchCount()) << "step " << step;
+      ASSERT_EQ(nodesOf(ours), nodesOf(fresh)) << "step " << step;
+      for (const std::size_t k : {1, 5}) {
+        Indices oi, fi, ri;
+        std::vector<float> od, fd, rd;
+        ours.nearestKSearch(p, pcl::uindex_t(k), oi, od);
+        fresh.nearestKSearch(p, pcl::uindex_t(k), fi, fd);
+        ref.nearestKSearch(p, pcl::uindex_t(k), ri, rd);
+        ASSERT_EQ(oi, fi) << "step " << step << ", k = " << k;
+        ASSERT_EQ(od, fd) << "step " << step << ", k = " << k;
+        expectSameNearest(*cloud, p, ri, rd, oi, od);
+      }
+      pcl::index_t oa, fa, ra;
+      float oad, fad, rad;
+      ours.approxNearestSearch(p, oa, oad);
+      fresh.approxNearestSearch(p, fa, fad);
+      ref.approxNearestSearch(p, ra, rad);
+      ASSERT_EQ(oa, fa) << "step " << step;
+      ASSERT_EQ(oad, rad) << "step " << step;
+    }
+  }
 }

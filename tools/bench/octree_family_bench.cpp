@@ -49,6 +49,33 @@ double buildAndQuery(const Cloud::Ptr& cloud, double res, Query&& query) {
   return query(octree);
 }
 
+/**
+ * Adds the points one at a time to an empty octree (addPointToCloud), each followed by a search for the
+ * next point: nearestKSearch with k = 1, or approxNearestSearch. Returns the sum of the distances.
+ */
+template <template <typename...> class Octree>
+double addAndSearch(const std::vector<pcl::PointXYZ>& points, double res, bool approx) {
+  Octree<pcl::PointXYZ> octree(res);
+  Cloud::Ptr cloud(new Cloud);
+  octree.setInputCloud(cloud);
+  pcl::Indices idx;
+  std::vector<float> dist;
+  double s = 0;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    octree.addPointToCloud(points[i], cloud);
+    if (approx) {
+      pcl::index_t index;
+      float d;
+      octree.approxNearestSearch(points[i + 1], index, d);
+      s += d;
+    } else {
+      octree.nearestKSearch(points[i + 1], 1, idx, dist);
+      s += dist[0];
+    }
+  }
+  return s;
+}
+
 std::string scanTable(const BenchScan& target, const BenchScan& source, int repeats,
                       std::vector<std::string>& verdicts) {
   const double res = target.resolution;
@@ -81,6 +108,8 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
                 : buildAndQuery<pcl::octree::OctreePointCloudSearch>(cloud, res, body);
   };
   const Eigen::Vector3f half = Eigen::Vector3f::Constant(float(4 * res));
+  // A loop that grows the octree point by point and searches after each point, as an odometry front end does.
+  const auto growing = queriesFrom(*cloud, 4000, 0.0);
   std::vector<Row> rows = {
       {"build only", 0,
        [&](bool ours) { return search(ours, [&](auto& t) { return double(t.getLeafCount()); }); }},
@@ -178,6 +207,16 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
            }
            return s;
          });
+       }},
+      {format("add a point, then nearestKSearch k = 1 (%zu times)", growing.size()), growing.size(),
+       [&](bool ours) {
+         return ours ? addAndSearch<pcl::fot::OctreePointCloudSearch>(growing, res, false)
+                     : addAndSearch<pcl::octree::OctreePointCloudSearch>(growing, res, false);
+       }},
+      {format("add a point, then approxNearestSearch (%zu times)", growing.size()), growing.size(),
+       [&](bool ours) {
+         return ours ? addAndSearch<pcl::fot::OctreePointCloudSearch>(growing, res, true)
+                     : addAndSearch<pcl::octree::OctreePointCloudSearch>(growing, res, true);
        }},
       {"change detector: both buffers + new voxels", 1,
        [&](bool ours) {

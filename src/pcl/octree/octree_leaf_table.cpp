@@ -47,6 +47,7 @@ bool OctreeLeafTable::setResolution(double resolution) {
   resolution_ = resolution;
   tree_ = FastOctTree(resolution);
   getKeyBitSize();
+  ++version_;
   return true;
 }
 
@@ -122,6 +123,7 @@ bool OctreeLeafTable::adoptBoundingBoxToPoint(double x, double y, double z) {
     }
     const bool violated = lower[0] || lower[1] || lower[2] || upper[0] || upper[1] || upper[2];
     if (bounding_box_defined_ && !violated) return true;
+    ++version_;  // a new box: keys, root and branches change
     if (!bounding_box_defined_) {
       // The first point: a box of ±res/2 around it.
       for (int a = 0; a < 3; ++a) {
@@ -192,6 +194,7 @@ void OctreeLeafTable::defineBoundingBox(const double min[3], const double max[3]
   offset_ = {0, 0, 0};
   phantoms_.clear();
   bounding_box_defined_ = true;
+  ++version_;
 }
 
 void OctreeLeafTable::enableDynamicDepth(std::size_t max_objs_per_leaf) {
@@ -252,31 +255,43 @@ OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bool& created) {
-  ++version_;
+  const std::uint64_t before = version_++;
   created = false;
+  Slot slot = kNoLeaf;
+  bool new_node = false;  // a leaf or, without containers, a cell: the branches gain it
   if (!holds_leaves_) {
+    new_node = tree_.getCell(k) != CellState::Occupied;
     tree_.setCell(k, CellState::Occupied);
     id = LeafId{k, 0};
-    return 0;
-  }
-  if (max_objs_per_leaf_ == 0) {
+    slot = 0;
+  } else if (max_objs_per_leaf_ == 0) {
     id = LeafId{k, 0};
-    if (last_slot_ != kNoLeaf && last_id_ == id) return last_slot_;
-    const auto it = leaves_.find(id);
-    Slot slot = it == leaves_.end() ? kNoLeaf : it->second;
+    if (last_slot_ != kNoLeaf && last_id_ == id) {
+      slot = last_slot_;
+    } else {
+      const auto it = leaves_.find(id);
+      slot = it == leaves_.end() ? kNoLeaf : it->second;
+      if (slot == kNoLeaf) {
+        slot = addLeaf(id);
+        created = new_node = true;
+        tree_.setCell(k, CellState::Occupied);
+      }
+      last_id_ = id;
+      last_slot_ = slot;
+    }
+  } else {
+    slot = leafOnPath(k, id);
     if (slot == kNoLeaf) {
       slot = addLeaf(id);
-      created = true;
-      tree_.setCell(k, CellState::Occupied);
+      created = new_node = true;
     }
-    last_id_ = id;
-    last_slot_ = slot;
-    return slot;
   }
-  const Slot slot = leafOnPath(k, id);
-  if (slot != kNoLeaf) return slot;
-  created = true;
-  return addLeaf(id);
+  // The branch index of the last walk follows a new leaf in place: adding a point and then walking or
+  // searching again costs what the change costs.
+  branch_cache_.follow(before, version_, [&](BranchIndex& index) {
+    if (new_node) addToBranches(index, id);
+  });
+  return slot;
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::createLeaf(const octree::OctreeKey& key, bool& created) {
@@ -379,34 +394,35 @@ std::shared_ptr<const OctreeLeafTable::BranchIndex> OctreeLeafTable::branchIndex
   return branch_cache_.get(version_, [&] { return buildBranchIndex(); });
 }
 
-std::shared_ptr<const OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex() const {
+void OctreeLeafTable::addToBranches(BranchIndex& index, LeafId node) const {
+  // Each node marks itself in its parent; a parent met before already has its ancestors marked.
+  for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
+    const LeafId parent = cubeOf(node.corner, level);
+    const auto bit = [&](std::int32_t v, std::int32_t offset) {
+      return (std::uint32_t(v - offset) >> node.level) & 1u;
+    };
+    const unsigned child = bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
+                           bit(node.corner.z, offset_[2]);
+    const auto [it, inserted] = index.try_emplace(parent, 0);
+    it->second |= std::uint8_t(1u << child);
+    if (!inserted) return;
+    node = parent;
+  }
+}
+
+std::shared_ptr<OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex() const {
   auto index = std::make_shared<BranchIndex>();
   const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
   index->emplace(root, 0);
-  // Each node marks itself in its parent; a parent met before already has its ancestors marked.
-  const auto addNode = [&](LeafId node) {
-    for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
-      const LeafId parent = cubeOf(node.corner, level);
-      const auto bit = [&](std::int32_t v, std::int32_t offset) {
-        return (std::uint32_t(v - offset) >> node.level) & 1u;
-      };
-      const unsigned child = bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
-                             bit(node.corner.z, offset_[2]);
-      const auto [it, inserted] = index->try_emplace(parent, 0);
-      it->second |= std::uint8_t(1u << child);
-      if (!inserted) return;
-      node = parent;
-    }
-  };
   if (holds_leaves_)
-    for (const auto& leaf : leaves_) addNode(leaf.first);
+    for (const auto& leaf : leaves_) addToBranches(*index, leaf.first);
   else
-    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { addNode(LeafId{k, 0}); });
+    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { addToBranches(*index, LeafId{k, 0}); });
   // PCL keeps the empty old roots of a box grown before any point as branches.
   for (const Phantom& ph : phantoms_) {
     const LeafId cube{ph.min, std::uint32_t(ph.level)};
     index->try_emplace(cube, 0);
-    addNode(cube);
+    addToBranches(*index, cube);
   }
   return index;
 }

@@ -215,7 +215,9 @@ class PCL_EXPORTS OctreeLeafTable {
   /** A new leaf of this cube in a free slot. */
   Slot addLeaf(const LeafId& id);
   void getKeyBitSize();
-  std::shared_ptr<const BranchIndex> buildBranchIndex() const;
+  std::shared_ptr<BranchIndex> buildBranchIndex() const;
+  /** Marks the node (a leaf's cube) in its parent, and each new parent in its own, up to the root. */
+  void addToBranches(BranchIndex& index, LeafId node) const;
 
   double resolution_;
   bool holds_leaves_;

@@ -253,7 +253,7 @@ class OctreePointCloud {
     return table_.existLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
   }
   /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
-  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
+  virtual void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
     table_.removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
   }
 

@@ -14,8 +14,10 @@ namespace fot {
 /**
  * pcl::octree::OctreePointCloudSearch on a FastOctTree: voxel, k-NN, approximate, radius, box and ray
  * searches with PCL's answers. k-NN searches run on a PointIndex of the octree's points (the engine of
- * FastOctTreeSearch), built at the first search after a change; radius and box searches scan the leaves of
- * the occupied cells around them. Distances are pcl::octree's own floats (Eigen's squaredNorm), bit for bit.
+ * FastOctTreeSearch), built at the first search and updated in place as points are added and voxels
+ * deleted (a loop that adds a point and searches pays for the point, not for a new index); radius and box
+ * searches scan the leaves of the occupied cells around them. Distances are pcl::octree's own floats (Eigen's
+ * squaredNorm), bit for bit.
  *
  * Answers are exact: where pcl::octree's float voxel centres are coarser than its voxels (coordinates near
  * 1e6, as in UTM), its pruning can miss points of a k-NN, radius or box search; these do not.
@@ -78,6 +80,13 @@ class OctreePointCloudSearch : public OctreePointCloud<PointT, LeafContainerT, B
 
   /** The points inside the box, bounds included. */
   uindex_t boxSearch(const Eigen::Vector3f& min_pt, const Eigen::Vector3f& max_pt, Indices& k_indices) const;
+
+  /** As the octree's; the k-NN index of the last search loses the leaf's points in place. */
+  void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) override;
+
+ protected:
+  /** As the octree's; the k-NN index of the last search gains the point in place. */
+  void addPointIdx(uindex_t point_idx_arg) override;
 
  private:
   /** The index of the octree's points, rebuilt when the octree has changed since. */

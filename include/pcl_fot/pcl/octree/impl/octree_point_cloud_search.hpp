@@ -49,8 +49,33 @@ OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::pointIndex() c
     auto index = std::make_shared<PointIndex>();
     if (!this->input_->empty())
       index->build(&(*this->input_)[0].x, this->input_->size(), sizeof(PointT), points.data(), points.size());
-    return std::shared_ptr<const PointIndex>(std::move(index));
+    return index;
   });
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::addPointIdx(uindex_t point_idx_arg) {
+  const std::uint64_t before = this->version();
+  OctreeT::addPointIdx(point_idx_arg);
+  if (this->version() == before) return;  // refused
+  // An index added twice (PCL keeps both) makes PointIndex::add throw: the index is then built anew.
+  const auto index = static_cast<std::int32_t>(point_idx_arg);
+  cache_.follow(before, this->version(), [&](PointIndex& points) {
+    points.add(&(*this->input_)[point_idx_arg].x, 1, sizeof(PointT), &index);
+  });
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::removeLeaf(uindex_t idx_x_arg,
+                                                                                  uindex_t idx_y_arg,
+                                                                                  uindex_t idx_z_arg) {
+  Indices gone;
+  if (this->existLeaf(idx_x_arg, idx_y_arg, idx_z_arg))
+    this->findLeaf(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))->getContainer().getPointIndices(gone);
+  const std::uint64_t before = this->version();
+  OctreeT::removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
+  cache_.follow(before, this->version(),
+                [&](PointIndex& points) { points.remove(gone.data(), gone.size()); });
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
