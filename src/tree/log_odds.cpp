@@ -297,13 +297,29 @@ void FastOctTree::merge(const FastOctTree& other) {
     merge(copy);
     return;
   }
+  // The cells of one 2×2×2 leaf come one after another (Morton order): they are written together.
   Accessor accessor(*this, true);
+  Key leaf{};
+  std::uint32_t mask = 0;
+  float update[8];
+  const auto flush = [&] {
+    if (mask != 0) accessor.updateLeafCells(leaf, mask, update);
+    mask = 0;
+  };
   other.forEachLogOdds([&](const Region& r, float log_odds) {
-    if (r.level == 0)
-      accessor.updateCell(r.min_key, log_odds);
-    else
+    if (r.level > 0) {
+      flush();
       updateCube(TreeCoord(r.min_key), r.level, log_odds);  // a settled cube: whole cubes at once
+      return;
+    }
+    const TreeCoord c(r.min_key), l(leaf);
+    if (mask != 0 && ((c[0] ^ l[0]) | (c[1] ^ l[1]) | (c[2] ^ l[2])) >> 1 != 0) flush();
+    leaf = r.min_key;
+    const unsigned o = c.octant(1);
+    mask |= 1u << o;
+    update[o] = log_odds;
   });
+  flush();
 }
 
 }  // namespace fot

@@ -129,17 +129,31 @@ class BasicAccessor {
 
   /** FastOctTree::updateLogOdds for a valid key, with a finite update. */
   void updateCell(const Key& key, float update) {
+    const float update8[8] = {update, update, update, update, update, update, update, update};
+    updateLeafCells(key, 1u << TreeCoord(key).octant(1), update8);
+  }
+
+  /**
+   * updateCell for the cells `mask` selects of the 2×2×2 leaf holding `key`, a valid key: cell o by
+   * update[o], with one walk for the leaf.
+   */
+  void updateLeafCells(const Key& key, std::uint32_t mask, const float* update) {
     static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
     if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::updateCell", key);
     const TreeCoord c(key);
     const NodeWord w = reach(c[0], c[1], c[2]);
     if (bottom_ > 1) {
-      float v = tree_->settledValue(node::state(w, c.octant(bottom_)));
-      if (!tree_->getSensorModel().updateNode(v, update)) return;  // a settled cube the update cannot move
+      // A settled cube stays whole unless an update can move it.
+      const float settled = tree_->settledValue(node::state(w, c.octant(bottom_)));
+      bool moves = false;
+      for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+        float v = settled;
+        moves |= tree_->getSensorModel().updateNode(v, update[__builtin_ctz(m)]);
+      }
+      if (!moves) return;
       expand(c[0], c[1], c[2]);
     }
-    const float update8[8] = {update, update, update, update, update, update, update, update};
-    bottom_ = tree_->updateLeaf(path_, 1u << c.octant(1), update8);
+    bottom_ = tree_->updateLeaf(path_, mask, update);
     version_ = tree_->structureVersion();
   }
 
