@@ -9,7 +9,8 @@
 #include <tuple>
 #include <vector>
 
-#include <pcl/common/point_tests.h>
+#include <pcl/common/point_tests.h>  // PCL 1.13's occupancy header uses isFinite without including it
+#include <pcl/octree/octree_pointcloud_occupancy.h>
 #include <pcl/octree/octree_search.h>
 
 #include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
@@ -339,9 +340,10 @@ TEST(OctreeSearchAgreement, BadInputGetsAnEmptyAnswer) {
 
 namespace {
 
-/** Our octree's nodes in depth-first order: each one's key, depth and child pattern. */
+/** An octree's nodes in depth-first order: each one's key, depth and child pattern. */
+template <typename Octree>
 std::vector<std::tuple<pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, char>> nodesOf(
-    const Ours& octree) {
+    const Octree& octree) {
   std::vector<std::tuple<pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, pcl::uindex_t, char>> nodes;
   for (auto it = octree.begin(); it != octree.end(); ++it) {
     const auto& k = it.getCurrentOctreeKey();
@@ -400,5 +402,28 @@ TEST(OctreeSearchAgreement, InterleavedAddsDeletionsAndSearchesEqualAFreshBuild)
       ASSERT_EQ(oa, fa) << "step " << step;
       ASSERT_EQ(oad, rad) << "step " << step;
     }
+  }
+}
+
+// The occupancy octree's leaves are the tree's cells: its branch index follows them in place too.
+TEST(OctreeSearchAgreement, OccupancyBranchesFollowSetAndDeletedVoxels) {
+  pcl::fot::OctreePointCloudOccupancy<PointXYZ> ours(0.25);
+  pcl::octree::OctreePointCloudOccupancy<PointXYZ> ref(0.25);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
+  std::vector<PointXYZ> set;
+  for (int step = 0; step < 300; ++step) {
+    if (step % 7 == 6) {
+      const PointXYZ victim = set[rng() % set.size()];
+      ours.deleteVoxelAtPoint(victim);
+      ref.deleteVoxelAtPoint(victim);
+    } else {
+      set.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+      ours.setOccupiedVoxelAtPoint(set.back());
+      ref.setOccupiedVoxelAtPoint(set.back());
+    }
+    const auto copy = ours;  // builds its branch index afresh
+    ASSERT_EQ(ours.getBranchCount(), ref.getBranchCount()) << "step " << step;
+    ASSERT_EQ(nodesOf(ours), nodesOf(copy)) << "step " << step;
   }
 }

@@ -340,19 +340,28 @@ bool OctreeLeafTable::existLeaf(uindex_t x, uindex_t y, uindex_t z) const {
 void OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
   if (((x | y | z) >> depth_) != 0) return;
   const Key target = pclKeyToTreeKey(octree::OctreeKey(x, y, z));
-  ++version_;
+  const std::uint64_t before = version_++;
+  LeafId gone{target, 0};
+  bool removed = false;
   if (holds_leaves_) {
     // The first leaf on the path goes, with every cell of its cube.
-    LeafId id;
-    if (leafOnPath(target, id) != kNoLeaf) {
-      const std::int32_t last = std::int32_t((std::int64_t(1) << id.level) - 1);
-      eraseLeaf(id);
-      tree_.setBox(id.corner, Key{id.corner.x + last, id.corner.y + last, id.corner.z + last},
+    if (leafOnPath(target, gone) != kNoLeaf) {
+      const std::int32_t last = std::int32_t((std::int64_t(1) << gone.level) - 1);
+      eraseLeaf(gone);
+      tree_.setBox(gone.corner, Key{gone.corner.x + last, gone.corner.y + last, gone.corner.z + last},
                    CellState::Unknown);
+      removed = true;
     }
   } else {
+    removed = tree_.getCell(target) == CellState::Occupied;
     tree_.eraseCell(target);
   }
+  // The branch index of the last walk follows, unless empty old roots are about: their pruning below is
+  // left to a new index.
+  if (phantoms_.empty())
+    branch_cache_.follow(before, version_, [&](BranchIndex& index) {
+      if (removed) removeFromBranches(index, gone);
+    });
   // PCL prunes the branches left without children on the way to the deleted voxel. Empty old roots nest,
   // so the smallest goes first, and each larger one only once nothing is left inside it.
   std::sort(phantoms_.begin(), phantoms_.end(),
@@ -394,18 +403,36 @@ std::shared_ptr<const OctreeLeafTable::BranchIndex> OctreeLeafTable::branchIndex
   return branch_cache_.get(version_, [&] { return buildBranchIndex(); });
 }
 
+unsigned OctreeLeafTable::childIndex(const LeafId& node) const {
+  const auto bit = [&](std::int32_t v, std::int32_t offset) {
+    return (std::uint32_t(v - offset) >> node.level) & 1u;
+  };
+  return bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
+         bit(node.corner.z, offset_[2]);
+}
+
 void OctreeLeafTable::addToBranches(BranchIndex& index, LeafId node) const {
   // Each node marks itself in its parent; a parent met before already has its ancestors marked.
   for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
     const LeafId parent = cubeOf(node.corner, level);
-    const auto bit = [&](std::int32_t v, std::int32_t offset) {
-      return (std::uint32_t(v - offset) >> node.level) & 1u;
-    };
-    const unsigned child = bit(node.corner.x, offset_[0]) << 2 | bit(node.corner.y, offset_[1]) << 1 |
-                           bit(node.corner.z, offset_[2]);
+    const unsigned child = childIndex(node);
     const auto [it, inserted] = index.try_emplace(parent, 0);
     it->second |= std::uint8_t(1u << child);
     if (!inserted) return;
+    node = parent;
+  }
+}
+
+void OctreeLeafTable::removeFromBranches(BranchIndex& index, LeafId node) const {
+  // PCL's pruning: a parent left without children goes too, up to the root, which stays.
+  for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
+    const LeafId parent = cubeOf(node.corner, level);
+    const unsigned child = childIndex(node);
+    const auto it = index.find(parent);
+    if (it == index.end()) return;
+    it->second &= std::uint8_t(~(1u << child));
+    if (it->second != 0 || level == depth_) return;
+    index.erase(it);
     node = parent;
   }
 }

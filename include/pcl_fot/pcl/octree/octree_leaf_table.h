@@ -216,8 +216,12 @@ class PCL_EXPORTS OctreeLeafTable {
   Slot addLeaf(const LeafId& id);
   void getKeyBitSize();
   std::shared_ptr<BranchIndex> buildBranchIndex() const;
+  /** The node's place among its parent's children, in PCL's order. */
+  unsigned childIndex(const LeafId& node) const;
   /** Marks the node (a leaf's cube) in its parent, and each new parent in its own, up to the root. */
   void addToBranches(BranchIndex& index, LeafId node) const;
+  /** Unmarks the node (a leaf's cube) in its parent, and removes each parent left without children. */
+  void removeFromBranches(BranchIndex& index, LeafId node) const;
 
   double resolution_;
   bool holds_leaves_;
