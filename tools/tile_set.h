@@ -12,7 +12,8 @@ namespace fot_tools {
 /** A directory holding tiles.json, or a path to such an index file. */
 bool isTileSet(const std::string& path);
 
-/** The tile set's index and the files in its tiles/ folder: what an output must not overwrite. */
+/** The tile set's index and the files in its tiles/ folder and its runs' folders there: what an output must
+ * not overwrite. */
 std::vector<std::string> tileSetFiles(const std::string& path);
 
 /**

@@ -8,6 +8,11 @@ A run has two stages. First one task per scan walks the scan's rays, exactly as 
 walks them (FastOctTree.trace_scan), and files the cells it updates by tile. Then one task per tile writes,
 scan by scan in time order, that scan's cells of the tile into the tile's map (apply_scan).
 
+A run writes its tiles into a folder of its own, tiles/<run>/, and only when every task has succeeded does it
+replace tiles.json, atomically, and then remove the folders of earlier runs. So a run that fails, or a process
+killed at any point, leaves the tile set that was there before whole. (A failed run removes its folder, but a
+task still running on a cluster can write there afterwards; the next run that succeeds removes it.)
+
 Why the result is exact: a cell's value depends only on the updates it receives and their order. Each
 scan's cells are the whole-map insertion's, each cell is written by the one task of its tile, and the scans
 come in time order, so each cell gets the same updates in the same order as in one process. Tiles share no
@@ -150,9 +155,9 @@ def peak_rss_bytes():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
-def map_tile(spec, level, index, scan_count, work_dir, out_dir):
+def map_tile(spec, level, index, scan_count, work_dir, out_dir, run):
     """Stage two: every scan's cells of the tile, in time order, into the tile's map, written as
-    tiles/<name>.fot. Returns the tile's record for the index, or None when no cell was written."""
+    tiles/<run>/<name>.fot. Returns the tile's record for the index, or None when no cell was written."""
     start = time.perf_counter()
     name = tile_name(level, index)
     try:
@@ -166,11 +171,12 @@ def map_tile(spec, level, index, scan_count, work_dir, out_dir):
                 tree.apply_scan(np.ascontiguousarray(blocks))
         if tree.empty:
             return None
-        path = os.path.join(out_dir, "tiles", name + ".fot")
+        file = os.path.join("tiles", run, name + ".fot")
+        path = os.path.join(out_dir, file)
         tree.save(path)
     except Exception as e:
         raise TileSetError("tile %s: %s" % (name, e)) from e
-    return {"name": name, "level": level, "index": list(index), "file": os.path.join("tiles", name + ".fot"),
+    return {"name": name, "level": level, "index": list(index), "file": file,
             "bytes": os.path.getsize(path), "seconds": time.perf_counter() - start,
             "peak_rss_bytes": peak_rss_bytes()}
 
@@ -231,7 +237,7 @@ def _check_outputs(out_dir, inputs):
     tiles_dir = os.path.realpath(os.path.join(out_dir, "tiles"))
     for p in inputs:
         real = os.path.realpath(p)
-        if real in outputs or os.path.dirname(real) == tiles_dir:
+        if real in outputs or real.startswith(tiles_dir + os.sep):
             raise TileSetError("'%s' is an input; the output directory would write over it" % p)
 
 
@@ -277,26 +283,37 @@ def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, work
         raise TileSetError("%d poses for %d scans" % (len(poses), len(scan_paths)))
     _check_outputs(out_dir, scan_paths)
     out_dir = os.path.abspath(out_dir)
-    os.makedirs(os.path.join(out_dir, "tiles"), exist_ok=True)
-    work_dir = os.path.join(out_dir, ".work")
-    os.makedirs(work_dir, exist_ok=True)
     n = len(scan_paths)
-    run = uuid.uuid4().hex[:8]  # task keys of their own: a cluster may hold another run's tasks
-    client, cluster = _client(scheduler, workers, memory_limit)
+    run = uuid.uuid4().hex[:8]  # task keys and a tile folder of their own: a cluster may hold another run's tasks
+    tiles_dir = os.path.join(out_dir, "tiles")
+    work_dir = os.path.join(out_dir, ".work-" + run)
+    os.makedirs(os.path.join(tiles_dir, run))
+    os.makedirs(work_dir)
+    done, client, cluster = False, None, None
     try:
+        client, cluster = _client(scheduler, workers, memory_limit)
         touched = _run(client, trace_task,
                        [(spec, level, i, p, poses[i] if poses else None, work_dir) for i, p in enumerate(scan_paths)],
                        ["trace-scan-%d-%s" % (i, run) for i in range(n)], progress, "scans traced")
         tiles = sorted(set(t for scan in touched for t in scan))
-        records = _run(client, map_tile, [(spec, level, t, n, work_dir, out_dir) for t in tiles],
+        records = _run(client, map_tile, [(spec, level, t, n, work_dir, out_dir, run) for t in tiles],
                        ["tile-%s-%s" % (tile_name(level, t), run) for t in tiles], progress, "tiles mapped")
+        records = [r for r in records if r is not None]
+        write_index(out_dir, spec, level, records)
+        done = True
     finally:
-        client.close()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
         shutil.rmtree(work_dir, ignore_errors=True)
-    records = [r for r in records if r is not None]
-    write_index(out_dir, spec, level, records)
+        if not done:
+            shutil.rmtree(os.path.join(tiles_dir, run), ignore_errors=True)
+    # Earlier runs' tiles, which the index no longer names, and scratch folders of runs that were killed.
+    leftovers = [os.path.join(tiles_dir, e) for e in os.listdir(tiles_dir) if e != run]
+    leftovers += [os.path.join(out_dir, e) for e in os.listdir(out_dir) if e.startswith(".work-")]
+    for path in leftovers:
+        shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
     if stitch:
         open_tile_set(out_dir).save(os.path.join(out_dir, "map.fot"))
     return records
@@ -308,7 +325,7 @@ def _main(argv=None):
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("map", help="map scans (.pcd, .ply) tile by tile into a tile set")
     run.add_argument("scans", nargs="+")
-    run.add_argument("-out", "--out", required=True, help="output directory: tiles/, tiles.json (map.fot)")
+    run.add_argument("-out", "--out", required=True, help="output directory: tiles/RUN/, tiles.json (map.fot)")
     run.add_argument("--tile-level", type=int, required=True, help="tile edge 2**L cells, L from 2 to 15")
     run.add_argument("--scheduler", default="local", help="a Dask scheduler's address, or local (default)")
     run.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local workers (default: cores)")

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import shutil
 import subprocess
 
@@ -125,14 +126,15 @@ def test_tools_read_a_tile_set_as_one_map(room_scans, tmp_path, tools_dir):
     info = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
     assert info.returncode == 0 and str(whole.occupied_count) in info.stdout + info.stderr
     # A tile set's own files are inputs; a damaged tile is named.
-    tile = sorted((out / "tiles").iterdir())[0]
+    tile = out / json.loads((out / "tiles.json").read_text())["tiles"][0]["file"]
     refused = subprocess.run([os.path.join(tools_dir, "fot_convert"), str(out), str(tile)], capture_output=True,
                              text=True)
     assert refused.returncode == 1
     tile.write_bytes(tile.read_bytes()[:40])
     damaged = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
     assert damaged.returncode == 2 and "tile " + tile.stem in damaged.stderr
-    index = json.loads((out / "tiles.json").read_text())
+    good = (out / "tiles.json").read_text()
+    index = json.loads(good)
     index["tiles"][0]["file"] = "../../outside.fot"
     (out / "tiles.json").write_text(json.dumps(index))
     outside = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
@@ -145,6 +147,86 @@ def test_tools_read_a_tile_set_as_one_map(room_scans, tmp_path, tools_dir):
     (out / "tiles.json").write_text('{"format": "pcl_fot tile set", "tiles": [')
     bad = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
     assert bad.returncode == 2 and "tiles.json" in bad.stderr
+    index = json.loads(good)
+    index["origin"] = ["1", 0, 0]  # a string where a number is due is refused, not read as 0
+    (out / "tiles.json").write_text(json.dumps(index))
+    typed = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
+    assert typed.returncode == 2 and "'origin' takes 3 numbers" in typed.stderr
+
+
+class WorkerKiller:
+    """A Dask worker plugin that ends its worker's process (as a crash or the OOM killer would) at a task's
+    transition: the first task whose key starts with `prefix`, once in the whole cluster, or with `always`,
+    that same task every time it runs. The task's key is written to `marker`."""
+
+    def __init__(self, marker, prefix, finish, always=False):
+        self.marker, self.prefix, self.finish, self.always = marker, prefix, finish, always
+
+    def setup(self, worker):
+        pass
+
+    def teardown(self, worker):
+        pass
+
+    def transition(self, key, start, finish, **kwargs):
+        if finish != self.finish or not str(key).startswith(self.prefix):
+            return
+        try:
+            with open(self.marker, "x") as f:  # the first task to get here in any worker
+                f.write(str(key))
+        except FileExistsError:
+            with open(self.marker) as f:
+                if not self.always or f.read() != str(key):
+                    return
+        os._exit(1)
+
+
+def killing_cluster(plugins, allowed_failures):
+    from dask import config
+    from dask.distributed import Client, LocalCluster
+
+    with config.set({"distributed.scheduler.allowed-failures": allowed_failures}):
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
+    with Client(cluster) as client:
+        for i, plugin in enumerate(plugins):
+            client.register_worker_plugin(plugin, name="killer%d" % i)
+    return cluster
+
+
+def test_workers_that_die_mid_task_change_nothing(room_scans, tmp_path):
+    # One worker dies as a scan's trace starts, another after a tile's file is written but before its result
+    # is reported: Dask runs both tasks again elsewhere, and the map is the single-process map.
+    spec = tiles.MapSpec(0.05)
+    paths = [s[0] for s in room_scans]
+    plugins = [WorkerKiller(str(tmp_path / "trace.killed"), "trace-scan-", "executing"),
+               WorkerKiller(str(tmp_path / "tile.killed"), "tile-", "memory")]
+    with killing_cluster(plugins, allowed_failures=3) as cluster:
+        tiles.map_tiles(paths, str(tmp_path / "out"), spec, 5, scheduler=cluster.scheduler_address)
+    assert (tmp_path / "trace.killed").exists() and (tmp_path / "tile.killed").exists()
+    assert same_cells(tiles.open_tile_set(str(tmp_path / "out")), single_process_map(spec, paths))
+    assert sorted(os.listdir(str(tmp_path / "out"))) == ["tiles", "tiles.json"]
+
+
+def test_a_failed_run_names_the_tile_and_keeps_the_earlier_tile_set(room_scans, tmp_path):
+    spec = tiles.MapSpec(0.05)
+    out = str(tmp_path / "out")
+    tiles.map_tiles([room_scans[0][0]], out, spec, 5, workers=1)
+    before = tiles.open_tile_set(out)
+    index = (tmp_path / "out" / "tiles.json").read_bytes()
+    marker = tmp_path / "tile.killed"
+    with killing_cluster([WorkerKiller(str(marker), "tile-", "executing", always=True)], 0) as cluster:
+        with pytest.raises(tiles.TileSetError) as e:
+            tiles.map_tiles([s[0] for s in room_scans], out, spec, 5, scheduler=cluster.scheduler_address)
+    # Dask gives up on the tasks the dead workers held (with no failures allowed, the killer's neighbours too),
+    # and the error names the first of them.
+    assert marker.exists() and re.match(r"task tile-5(-+\d+){3}-[0-9a-f]{8}: ", str(e.value))
+    assert (tmp_path / "out" / "tiles.json").read_bytes() == index
+    assert same_cells(tiles.open_tile_set(out), before)
+    # A task still running when the run failed may leave files in the failed run's folder; the next run that
+    # succeeds removes every folder its index does not name.
+    records = tiles.map_tiles([room_scans[1][0]], out, spec, 5, workers=1)
+    assert os.listdir(os.path.join(out, "tiles")) == [records[0]["file"].split(os.sep)[1]]
+    assert sorted(os.listdir(out)) == ["tiles", "tiles.json"]
 
 
 @pytest.mark.skipif(real_scan_dir() is None, reason="PCL's real scans not found (PCL_FOT_DATA_DIR)")
