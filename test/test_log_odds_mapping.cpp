@@ -369,26 +369,26 @@ TEST(LogOddsFiles, BtExportIsOctoMapsWriteBinaryByteForByte) {
   FastOctTree settled = ours;
   settled.toMaxLikelihood();
   EXPECT_EQ(settled.getUnsettledCount(), 0u);
-  EXPECT_EQ(settled.getValueBlockCount(), 0u);
+  EXPECT_EQ(settled.getValueRowCount(), 0u);
   EXPECT_EQ(settled.getValueLeafCount(), 0u);
   EXPECT_EQ(settled.getOccupiedCount(), ours.getOccupiedCount());
   EXPECT_EQ(io::encodeBt(settled), theirs.str());
 }
 
-TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
+TEST(LogOddsStorage, PaletteLeavesRowsAndFullPaletteKeepEveryFloat) {
   FastOctTree tree(0.1);
-  // 20000 leaves, one cell each, each its own value: the palette (16383 values) fills, blocks take the rest.
+  // 20000 leaves, one cell each, each its own value: the palette (16383 values) fills, rows take the rest.
   std::vector<float> values;
   for (int i = 0; i < 20000; ++i) {
     values.push_back(-1.9f + 3.0f * float(i) / 20000.0f);
     tree.setLogOdds(Key{2 * (i % 100), 2 * (i / 100), 0}, values.back());
   }
-  // One leaf with two values needs a block; -0.0 and 0.0 are different floats.
+  // One leaf with two values needs a row; -0.0 and 0.0 are different floats.
   tree.setLogOdds(Key{1000, 0, 0}, 0.0f);
   tree.setLogOdds(Key{1001, 0, 0}, -0.0f);
   EXPECT_EQ(tree.getValueLeafCount(), 20001u);
-  EXPECT_GT(tree.getValueBlockCount(), 20000u - 16383u);
-  EXPECT_LT(tree.getValueBlockCount(), 20001u - 16000u);
+  EXPECT_GT(tree.getValueRowCount(), 20000u - 16383u);
+  EXPECT_LT(tree.getValueRowCount(), 20001u - 16000u);
   const std::string bytes = io::encodeFot(tree);
   const FastOctTree back = io::decodeFot(bytes.data(), bytes.size());
   const FastOctTree* both[] = {&tree, &back};
@@ -401,7 +401,7 @@ TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
   }
   EXPECT_TRUE(back == tree);
   EXPECT_EQ(io::encodeFot(back), bytes);
-  // A block leaf that settles, and a palette leaf that settles, give their storage back.
+  // A row leaf that settles, and a palette leaf that settles, give their storage back.
   tree.setCell(Key{1000, 0, 0}, CellState::Occupied);
   tree.setCell(Key{1001, 0, 0}, CellState::Occupied);
   tree.setCell(Key{0, 0, 0}, CellState::Free);
@@ -417,12 +417,12 @@ TEST(LogOddsStorage, PaletteLeavesBlocksAndFullPaletteKeepEveryFloat) {
 TEST(LogOddsStorage, LeavesOfSeveralValuesTakeBytesWhileThePaletteIsShort) {
   FastOctTree tree(0.1);
   tree.setLogOdds(Key{0, 0, 0}, 0.5f);
-  tree.setLogOdds(Key{1, 0, 0}, -0.5f);  // two values in one leaf: a block of palette indices
-  EXPECT_EQ(tree.getValueBlockCount(), 1u);
+  tree.setLogOdds(Key{1, 0, 0}, -0.5f);  // two values in one leaf: a row of palette indices
+  EXPECT_EQ(tree.getValueRowCount(), 1u);
   for (int i = 0; i < 300; ++i) tree.setLogOdds(Key{4 + 2 * i, 0, 0}, 0.001f * float(i + 1));
   tree.setLogOdds(Key{0, 1, 0}, 0.299f);  // a value past the palette's first 255: the leaf takes floats
   tree.setLogOdds(Key{1, 1, 0}, 0.3f);
-  EXPECT_EQ(tree.getValueBlockCount(), 1u) << "the leaf kept one block, of another kind";
+  EXPECT_EQ(tree.getValueRowCount(), 1u) << "the leaf kept one row, of another kind";
   EXPECT_EQ(tree.getLogOdds(Key{0, 0, 0}), 0.5f);
   EXPECT_EQ(tree.getLogOdds(Key{1, 0, 0}), -0.5f);
   EXPECT_EQ(tree.getLogOdds(Key{0, 1, 0}), 0.299f);
@@ -430,10 +430,10 @@ TEST(LogOddsStorage, LeavesOfSeveralValuesTakeBytesWhileThePaletteIsShort) {
   EXPECT_EQ(tree.getLogOdds(Key{4 + 2 * 299, 0, 0}), 0.3f);
   const std::string bytes = io::encodeFot(tree);
   EXPECT_TRUE(io::decodeFot(bytes.data(), bytes.size()) == tree);
-  tree.setLogOdds(Key{0, 1, 0}, 0.3f);  // one value again: no block
+  tree.setLogOdds(Key{0, 1, 0}, 0.3f);  // one value again: no row
   tree.setLogOdds(Key{0, 0, 0}, 0.3f);
   tree.setLogOdds(Key{1, 0, 0}, 0.3f);
-  EXPECT_EQ(tree.getValueBlockCount(), 0u);
+  EXPECT_EQ(tree.getValueRowCount(), 0u);
   EXPECT_EQ(tree.getUnsettledCount(), 304u);
 }
 

@@ -181,7 +181,7 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
   if (node::isBitmap(w)) {
     for (CellState s : {CellState::Free, CellState::Occupied})
       counts_[std::size_t(s)] -= node::cellsIn(node::popcount(node::octantMask(w, s)), level - 1);
-    releaseValues(at);
+    values_.release(w, at);
     value_leaves_ -= node::hasValues(w);
     return;
   }
@@ -191,15 +191,8 @@ void FastOctTree::releaseSubtree(std::size_t at, unsigned level) {
 
 void FastOctTree::shrinkToFit() {
   compactPool();
-  if (value_leaves_ == 0) {  // no leaf names a palette entry
-    std::vector<float>().swap(palette_);
-    std::unordered_map<std::uint32_t, std::uint32_t>().swap(palette_of_);
-    palette_hits_ = {};
-  }
   words_.shrink_to_fit();
-  value_of_.shrink_to_fit();
-  float_blocks_.shrinkToFit();
-  byte_blocks_.shrinkToFit();
+  values_.shrinkToFit(value_leaves_ == 0);  // no leaf names a palette entry then
 }
 
 void FastOctTree::compactPool() {
@@ -216,8 +209,7 @@ void FastOctTree::compactPool() {
       const std::uint32_t to = slots.back();
       slots.pop_back();
       std::copy_n(words_.begin() + std::ptrdiff_t(b) * 8, 8, words_.begin() + std::ptrdiff_t(to) * 8);
-      if (!value_of_.empty())
-        std::copy_n(value_of_.begin() + std::ptrdiff_t(b) * 8, 8, value_of_.begin() + std::ptrdiff_t(to) * 8);
+      values_.poolMoved(std::size_t(b) * 8, std::size_t(to) * 8, 8);
       words_[at] = node::reference(to);
       b = to;
     }
@@ -225,7 +217,7 @@ void FastOctTree::compactPool() {
   };
   walk(walk, 0);
   words_.resize(std::size_t(end) * 8);
-  if (!value_of_.empty()) value_of_.resize(words_.size());
+  values_.poolResized(words_.size());
   free_head_ = kNoBlock;
   free_blocks_ = 0;
   ++version_;
@@ -239,8 +231,7 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   if (n <= free_blocks_) return;
   const std::size_t fresh = n - free_blocks_;
   const std::size_t blocks = words_.size() / 8 + fresh;
-  const std::size_t bytes = blocks * 8 * sizeof(NodeWord) * (value_of_.empty() ? 1 : 2) +
-                            float_blocks_.bytes() + byte_blocks_.bytes();
+  const std::size_t bytes = blocks * 8 * sizeof(NodeWord) * (values_.indexed() ? 2 : 1) + values_.rowBytes();
   if (bytes > max_bytes_)
     throw MemoryLimitError("pcl::fot::FastOctTree: the pool would need " + std::to_string(bytes) +
                            " bytes, beyond the cap of " + std::to_string(max_bytes_) + " bytes");
@@ -249,7 +240,7 @@ void FastOctTree::reserveBlocks(std::size_t n) {
   if (blocks * 8 > words_.capacity()) {
     const std::size_t cap_words = max_bytes_ / sizeof(NodeWord);
     words_.reserve(std::max(blocks * 8, std::min(words_.capacity() * 2, cap_words)));
-    if (!value_of_.empty()) value_of_.reserve(words_.capacity());
+    values_.poolReserved(words_.capacity());
   }
 }
 
@@ -263,7 +254,7 @@ std::uint32_t FastOctTree::allocBlock() {
   }
   const std::uint32_t block = std::uint32_t(words_.size() / 8);
   words_.resize(words_.size() + 8);  // within the capacity reserveBlocks made
-  if (!value_of_.empty()) value_of_.resize(words_.size());
+  values_.poolResized(words_.size());
   return block;
 }
 
@@ -302,7 +293,7 @@ void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z,
       const std::size_t first = std::size_t(block) * 8;
       std::fill_n(words_.begin() + first, 8, node::uniform(CellState::Unknown));
       words_[first + octant] = root;
-      if (node::hasValueBlock(root)) value_of_[first + octant] = value_of_[0];
+      if (node::hasValueRow(root)) values_.poolMoved(0, first + octant, 1);
       words_[0] = node::reference(block);
     }
     ++root_level_;
@@ -353,11 +344,8 @@ void FastOctTree::clear() {
   free_blocks_ = 0;
   live_blocks_ = 0;
   counts_ = {0, 0, 0};
-  releaseAllValues();
+  values_.clear();
   value_leaves_ = 0;
-  palette_.clear();
-  palette_of_.clear();
-  palette_hits_ = {};
   ++version_;
 }
 

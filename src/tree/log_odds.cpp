@@ -75,7 +75,7 @@ void FastOctTree::toMaxLikelihood() {
 NodeWord FastOctTree::settleSubtree(std::size_t at) {
   NodeWord w = words_[at];
   if (node::isBitmap(w)) {
-    releaseValues(at);
+    values_.release(w, at);
     return words_[at] = w & ~(node::kValueFlag | node::kPaletteMask);
   }
   NodeWord folded = node::kBitmapTag;
@@ -92,78 +92,15 @@ NodeWord FastOctTree::settleSubtree(std::size_t at) {
 
 void FastOctTree::leafValues(std::size_t at, float (&v)[8]) const {
   const NodeWord w = words_[at];
-  const std::uint32_t p = node::palette(w);
-  if (!node::hasValues(w)) {
-    for (unsigned o = 0; o < 8; ++o) v[o] = settledValue(node::state(w, o));
-  } else if (p == 0) {
-    std::memcpy(v, float_blocks_.at(value_of_[at]), sizeof v);
-  } else if (p == node::kByteBlock) {
-    const std::uint8_t* index = byte_blocks_.at(value_of_[at]);
-    for (unsigned o = 0; o < 8; ++o) v[o] = palette_[index[o]];  // entry 0, unknown, is NaN
-  } else {
-    const std::uint32_t known = ~node::octantMask(w, CellState::Unknown);
-    for (unsigned o = 0; o < 8; ++o) v[o] = (known >> o) & 1u ? palette_[p] : kUnknownValue;
+  if (node::hasValues(w)) {
+    values_.values(w, at, v);
+    return;
   }
-}
-
-std::uint32_t FastOctTree::paletteIndex(float value) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &value, sizeof bits);
-  // A map's leaves share a few values: a small table answers before the hash map.
-  PaletteHit& hit = palette_hits_[(bits * 0x9E3779B1u) >> (32 - kPaletteHitBits)];
-  if (hit.index != 0 && hit.bits == bits) return hit.index;
-  const auto found = palette_of_.find(bits);
-  std::uint32_t index = 0;
-  if (found != palette_of_.end()) {
-    index = found->second;
-  } else if (palette_.size() < node::kByteBlock) {            // room: 1 .. kByteBlock - 1
-    if (palette_.empty()) palette_.push_back(kUnknownValue);  // index 0: no palette
-    palette_.push_back(value);
-    index = palette_of_[bits] = std::uint32_t(palette_.size() - 1);
-  }
-  hit = PaletteHit{bits, index};
-  return index;
-}
-
-NodeWord FastOctTree::storeValues(std::size_t at, NodeWord states, const float (&v)[8]) {
-  // One value in every known cell, bit for bit (-0.0 is not 0.0 here): the word names it.
-  const float* one = nullptr;
-  bool uniform = true;
-  for (const float& x : v)
-    if (!std::isnan(x)) {
-      uniform = uniform && (!one || std::memcmp(&x, one, sizeof x) == 0);
-      one = &x;
-    }
-  const std::uint32_t p = uniform && one ? paletteIndex(*one) : 0;
-  if (p != 0) {
-    releaseValues(at);
-    return states | node::kValueFlag | (p << node::kPaletteShift);
-  }
-  // Values among the palette's first 255: a byte per cell, its palette index (0 where unknown).
-  std::uint8_t index[8];
-  bool bytes = true;
-  for (unsigned o = 0; o < 8 && bytes; ++o) {
-    const std::uint32_t q = std::isnan(v[o]) ? 0 : paletteIndex(v[o]);
-    bytes = std::isnan(v[o]) || (q != 0 && q <= 0xFF);
-    index[o] = std::uint8_t(q);
-  }
-  const std::uint32_t kind = bytes ? node::kByteBlock : 0;
-  const NodeWord old = words_[at];
-  if (!node::hasValueBlock(old) || node::palette(old) != kind) {
-    reserveValueBlock();
-    const std::uint32_t block = bytes ? byte_blocks_.allocate() : float_blocks_.allocate();
-    releaseValues(at);  // the old block: the new one keeps the index alive
-    value_of_[at] = block;
-  }
-  if (bytes)
-    std::memcpy(byte_blocks_.at(value_of_[at]), index, sizeof index);
-  else
-    std::memcpy(float_blocks_.at(value_of_[at]), v, sizeof v);
-  return states | node::kValueFlag | (kind << node::kPaletteShift);
+  for (unsigned o = 0; o < 8; ++o) v[o] = settledValue(node::state(w, o));
 }
 
 void FastOctTree::installValues(std::vector<float> values) {
-  releaseAllValues();
+  values_.releaseRows();
   if (values.empty()) return;
   std::size_t next = 0;
   auto walk = [&](auto& self, std::size_t at) -> void {
@@ -172,44 +109,14 @@ void FastOctTree::installValues(std::vector<float> values) {
       if (!node::hasValues(w)) return;
       float v[8];
       std::memcpy(v, &values[8 * next++], sizeof v);
-      words_[at] = w & ~node::kValueFlag;  // no values yet
-      words_[at] = storeValues(at, words_[at], v);
+      const NodeWord states = w & ~node::kValueFlag;  // no values yet
+      words_[at] = values_.store(at, states, states, v, pool());
       ++value_leaves_;
       return;
     }
     for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
   };
   walk(walk, 0);
-}
-
-void FastOctTree::reserveValueBlock(std::size_t extra_words) {
-  const std::size_t bytes = 2 * (words_.size() + extra_words) * sizeof(NodeWord) + float_blocks_.bytes() +
-                            float_blocks_.growth() + byte_blocks_.bytes() + byte_blocks_.growth();
-  if (bytes > max_bytes_)
-    throw MemoryLimitError("pcl::fot::FastOctTree: the pool and its values would need " +
-                           std::to_string(bytes) + " bytes, beyond the cap of " + std::to_string(max_bytes_) +
-                           " bytes");
-  if (value_of_.empty()) {
-    value_of_.reserve(words_.capacity());
-    value_of_.resize(words_.size());
-  }
-}
-
-void FastOctTree::releaseValues(std::size_t at) {
-  const NodeWord w = words_[at];
-  if (!node::hasValueBlock(w)) return;
-  if (node::palette(w) == 0)
-    float_blocks_.release(value_of_[at]);
-  else
-    byte_blocks_.release(value_of_[at]);
-  // No block left, as when a scan repeated until it clamps settles every cell: no index either.
-  if (getValueBlockCount() == 0) std::vector<std::uint32_t>().swap(value_of_);
-}
-
-void FastOctTree::releaseAllValues() {
-  std::vector<std::uint32_t>().swap(value_of_);
-  float_blocks_.clear();
-  byte_blocks_.clear();
 }
 
 unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
@@ -222,11 +129,11 @@ unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
     settled = settled && model_.settled(v[o]);
   }
   if (settled) {
-    releaseValues(at);
+    values_.release(words_[at], at);
   } else {
     float canonical[8];  // one NaN for every unknown cell
     for (unsigned o = 0; o < 8; ++o) canonical[o] = std::isnan(v[o]) ? kUnknownValue : v[o];
-    w = storeValues(at, w, canonical);
+    w = values_.store(at, words_[at], w, canonical, pool());
   }
   return writeLeaf(path, w);
 }

@@ -2,7 +2,7 @@
 # header that is not on the list below of those whose templates or inline hot paths need it.
 set(allowed
   "pcl_fot/tree/tree_coord.h:pcl_fot/detail/bits.h"
-  "pcl_fot/tree/fast_oct_tree.h:pcl_fot/detail/block_pages.h"
+  "pcl_fot/tree/leaf_values.h:pcl_fot/detail/row_pages.h"
   "pcl_fot/dense/fast_occ_mesh.h:pcl_fot/detail/bits.h"
   "pcl_fot/pcl/octree/octree_leaf_table.h:pcl_fot/detail/version_cache.h"
   "pcl_fot/pcl/octree/octree_point_cloud_search.h:pcl_fot/detail/version_cache.h"

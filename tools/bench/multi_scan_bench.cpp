@@ -142,7 +142,7 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
          "(`ScanStats::ray_cells` and `free_cells`): how often the walk visits a cell again within a scan. "
          "Memory: OctoMap's `memoryUsage()` (its nodes, without malloc's overhead) and our "
          "`getMemoryBytes()` "
-         "after `shrinkToFit()` (pool, free blocks included, value blocks and their index, the palette). "
+         "after `shrinkToFit()` (pool, free blocks included, value rows and their index, the palette). "
          "Goal: 30× OctoMap's speed on one thread, 1.7× that on two, and at most 1/5 of its memory.\n\n" +
          table.markdown();
 }

@@ -199,7 +199,7 @@ class BasicAccessor {
    * in the grown pool: past the cap, nothing changes.
    */
   void expand(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    tree_->reserveValueBlock(8 * (bottom_ - 1));
+    tree_->values_.reserveRow(tree_->pool(), 8 * (bottom_ - 1));
     tree_->expandTo(path_, bottom_, x, y, z);
     bottom_ = 1;
   }

@@ -7,12 +7,11 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
-#include <unordered_map>
 #include <vector>
 
-#include <pcl_fot/detail/block_pages.h>
 #include <pcl_fot/tree/cell_grid.h>
 #include <pcl_fot/tree/key.h>
+#include <pcl_fot/tree/leaf_values.h>
 #include <pcl_fot/tree/node_view.h>
 #include <pcl_fot/tree/node_word.h>
 #include <pcl_fot/tree/sensor_model.h>
@@ -32,12 +31,6 @@ struct Region {
   Key min_key;
   unsigned level;
   CellState state;
-};
-
-/** Thrown when an operation would grow the pool beyond the cap set with setMaxMemoryBytes(). */
-class MemoryLimitError : public std::length_error {
- public:
-  using std::length_error::length_error;
 };
 
 template <typename TreeT>
@@ -170,18 +163,15 @@ class FastOctTree {
   /** Node words in use: the root plus 8 per block. */
   std::size_t getNodeCount() const { return 1 + 8 * live_blocks_; }
   /**
-   * Leaves whose cells carry different values, each with a block: of 8 palette indices (8 bytes) when the
+   * Leaves whose cells carry different values, each with a row: of 8 palette indices (8 bytes) when the
    * palette's first 255 values hold them, else of 8 floats. A leaf whose known cells hold one value takes
-   * none: its word names the value in a palette of up to 16382 values.
+   * none: its word names the value in a palette of up to 16382 values (LeafValues).
    */
-  std::size_t getValueBlockCount() const { return float_blocks_.live() + byte_blocks_.live(); }
-  /** Leaves whose cells carry values (a cell between the clamps), by palette or by block. */
+  std::size_t getValueRowCount() const { return values_.rowCount(); }
+  /** Leaves whose cells carry values (a cell between the clamps), by palette or by row. */
   std::size_t getValueLeafCount() const { return value_leaves_; }
-  /** Every byte the tree holds: the object, the pool and the values, free blocks included. */
-  std::size_t getMemoryBytes() const {
-    return sizeof(*this) + (words_.capacity() + value_of_.capacity()) * 4 + float_blocks_.bytes() +
-           byte_blocks_.bytes() + palette_.capacity() * (sizeof(float) + 2 * sizeof(void*));
-  }
+  /** Every byte the tree holds: the object, the pool and the values, free blocks and rows included. */
+  std::size_t getMemoryBytes() const { return sizeof(*this) + words_.capacity() * 4 + values_.bytes(); }
   /** Root level: the root spans 2^depth cells per axis. */
   unsigned getDepth() const { return root_level_; }
 
@@ -258,9 +248,7 @@ class FastOctTree {
     const NodeWord w = words_[at];
     if (!node::hasValues(w) || node::state(w, o) == CellState::Unknown)
       return settledValue(node::state(w, o));
-    const std::uint32_t p = node::palette(w);
-    if (p == 0) return float_blocks_.at(value_of_[at])[o];
-    return palette_[p == node::kByteBlock ? byte_blocks_.at(value_of_[at])[o] : p];
+    return values_.value(w, at, o);
   }
   /** The log-odds a settled cell of this state holds; NaN for Unknown. */
   float settledValue(CellState s) const {
@@ -308,24 +296,12 @@ class FastOctTree {
   unsigned setLeafStates(const std::size_t* path, std::uint32_t mask, CellState state);
   /** Sets cell o of the leaf at path[1] to `value`. */
   unsigned setLeafValue(const std::size_t* path, unsigned o, float value);
-  /** Writes a leaf's 8 values (NaN: unknown) as its word and, if a cell is unsettled, its value block. */
+  /** Writes a leaf's 8 values (NaN: unknown) as its word and, if a cell is unsettled, its values. */
   unsigned commitLeaf(const std::size_t* path, const float (&v)[8]);
   void leafValues(std::size_t at, float (&v)[8]) const;
-  /**
-   * Makes room for one more value block once the pool has grown by `extra_words` (an expansion about to
-   * happen), or throws MemoryLimitError before anything changes.
-   */
-  void reserveValueBlock(std::size_t extra_words = 0);
-  /**
-   * Stores unsettled values for the leaf word at `at`: in the palette if its known cells hold one value
-   * and the palette has room, else in a value block. Returns `states` flagged accordingly.
-   */
-  NodeWord storeValues(std::size_t at, NodeWord states, const float (&v)[8]);
-  /** The palette index of a value, added if new; 0 when the palette is full. */
-  std::uint32_t paletteIndex(float value);
-  void releaseValues(std::size_t at);
-  void releaseAllValues();
-  /** Gives the flagged leaves, in pre-order, the value blocks of `values` (a canonical pool's). */
+  /** The pool as LeafValues needs it for the memory cap. */
+  LeafValues::Pool pool() const { return {words_.size(), words_.capacity(), max_bytes_}; }
+  /** Gives the flagged leaves, in pre-order, the values of `values` (a canonical pool's). */
   void installValues(std::vector<float> values);
   /** toMaxLikelihood below the word at pool offset `at`; returns the word, folded where it became uniform. */
   NodeWord settleSubtree(std::size_t at);
@@ -362,20 +338,8 @@ class FastOctTree {
   std::array<std::uint64_t, 3> counts_{};  // indexed by CellState; the Unknown entry is unused
   SensorModel model_;
   UpdateRule rule_ = UpdateRule::Binary;
-  // Values of flagged leaves with a block: value_of_[offset] is the block of the leaf word at that pool
-  // offset (sized with the pool while a block exists), among the float or the byte blocks by its word.
-  std::vector<std::uint32_t> value_of_;
-  detail::BlockPages<float, 8> float_blocks_;
-  detail::BlockPages<std::uint8_t, 8> byte_blocks_;
-  std::size_t value_leaves_ = 0;
-  // The values leaves name; entry 0 is unused. Only ever grows, up to 16382 values.
-  std::vector<float> palette_;
-  std::unordered_map<std::uint32_t, std::uint32_t> palette_of_;  // a value's bits -> its index
-  struct PaletteHit {
-    std::uint32_t bits = 0, index = 0;  // index 0: empty
-  };
-  static constexpr unsigned kPaletteHitBits = 6;
-  std::array<PaletteHit, std::size_t(1) << kPaletteHitBits> palette_hits_{};
+  LeafValues values_;             // the flagged leaves' log-odds
+  std::size_t value_leaves_ = 0;  // flagged leaves
 };
 
 inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {

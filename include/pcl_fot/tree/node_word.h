@@ -14,9 +14,9 @@ namespace fot {
  * Tag bit 0 set: a bitmap word. Bits 16..31 hold the states of the node's 8 octants, 2 bits each
  * (octant i at bits 16+2i), and bits 2..15 are zero. At level 1 the octants are voxels: the paper's
  * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a level-1 word whose
- * cells carry log-odds between the clamps (see FastOctTree): bits 2..15 then hold the index of their one
- * value in the tree's palette, when all its known cells hold one value; kByteBlock when the tree keeps the
- * 8 cells' palette indices in a block of bytes aside; or 0 when it keeps their 8 floats in a block aside. Its
+ * cells carry log-odds between the clamps (see LeafValues): bits 2..15 then hold the index of their one
+ * value in the tree's palette, when all its known cells hold one value; kByteRow when the tree keeps the
+ * 8 cells' palette indices in a row of bytes aside; or 0 when it keeps their 8 floats in a row aside. Its
  * states are the values thresholded, so a reader of states needs no values. Tag bit 0 clear: a reference, the
  * index of the pool block that holds the 8 child words.
  */
@@ -29,7 +29,7 @@ constexpr NodeWord kBitmapTag = 1u;
 constexpr NodeWord kValueFlag = 2u;
 constexpr unsigned kPaletteShift = 2;
 constexpr NodeWord kPaletteMask = 0x3FFFu << kPaletteShift;
-constexpr std::uint32_t kByteBlock = 0x3FFFu;
+constexpr std::uint32_t kByteRow = 0x3FFFu;
 constexpr unsigned kStateShift = 16;
 /** Largest block index a reference word can hold. */
 constexpr std::uint32_t kMaxBlocks = 0x7FFFFFFFu;
@@ -75,13 +75,13 @@ constexpr NodeWord withStates(NodeWord w, std::uint32_t mask, CellState s) {
   return (w & ~field) | ((pairs * NodeWord(s)) << kStateShift);
 }
 
-/** A flagged leaf's palette index; 0 when its values are in a block. */
+/** A flagged leaf's palette index; 0 when its values are in a row of floats. */
 constexpr std::uint32_t palette(NodeWord w) {
   return (w & kPaletteMask) >> kPaletteShift;
 }
-/** A flagged leaf whose values are in a block, of floats or of palette indices. */
-constexpr bool hasValueBlock(NodeWord w) {
-  return hasValues(w) && (palette(w) == 0 || palette(w) == kByteBlock);
+/** A flagged leaf whose values are in a row, of floats or of palette indices. */
+constexpr bool hasValueRow(NodeWord w) {
+  return hasValues(w) && (palette(w) == 0 || palette(w) == kByteRow);
 }
 
 /** Bits set in an octant mask. Without -mpopcnt the builtin is a libgcc call, so count in registers. */

@@ -9,33 +9,33 @@ namespace fot {
 namespace detail {
 
 /**
- * Blocks of N values of T in fixed pages of 512 blocks: they grow without copying and without a doubled
- * vector's slack, and freed blocks are handed out again. The tree keeps its leaves' values in them.
+ * Rows of N values of T in fixed pages of 512 rows: they grow without copying and without a doubled
+ * vector's slack, and freed rows are handed out again. The tree keeps its leaves' values in them.
  */
 template <typename T, std::size_t N>
-class BlockPages {
+class RowPages {
  public:
   static constexpr unsigned kPageBits = 9;
   static constexpr std::size_t kPageBytes = (N << kPageBits) * sizeof(T);
 
-  T* at(std::uint32_t b) { return &pages_[b >> kPageBits][N * std::size_t(b & kPageMask)]; }
-  const T* at(std::uint32_t b) const { return &pages_[b >> kPageBits][N * std::size_t(b & kPageMask)]; }
+  T* at(std::uint32_t r) { return &pages_[r >> kPageBits][N * std::size_t(r & kPageMask)]; }
+  const T* at(std::uint32_t r) const { return &pages_[r >> kPageBits][N * std::size_t(r & kPageMask)]; }
 
-  /** Bytes the next allocate() adds: a page, or nothing when a freed block is at hand. */
+  /** Bytes the next allocate() adds: a page, or nothing when a freed row is at hand. */
   std::size_t growth() const { return free_.empty() ? kPageBytes : 0; }
   std::uint32_t allocate() {
     ++live_;
     if (!free_.empty()) {
-      const std::uint32_t b = free_.back();
+      const std::uint32_t r = free_.back();
       free_.pop_back();
-      return b;
+      return r;
     }
     if ((made_ >> kPageBits) == pages_.size()) pages_.emplace_back(N << kPageBits);
     return made_++;
   }
-  /** Frees a block; the last one frees the pages. */
-  void release(std::uint32_t b) {
-    free_.push_back(b);
+  /** Frees a row; the last one frees the pages. */
+  void release(std::uint32_t r) {
+    free_.push_back(r);
     if (--live_ == 0) clear();
   }
   void clear() {
@@ -56,7 +56,7 @@ class BlockPages {
   static constexpr std::uint32_t kPageMask = (1u << kPageBits) - 1;
   std::vector<std::vector<T>> pages_;
   std::vector<std::uint32_t> free_;
-  std::uint32_t made_ = 0;  // blocks handed out of the pages, free ones included
+  std::uint32_t made_ = 0;  // rows handed out of the pages, free ones included
   std::size_t live_ = 0;
 };
 
