@@ -975,3 +975,76 @@ TEST(BoundingBox, PointsOutsideGrowItAndDeleteTreeResetsIt) {
   expectSameBox(ref, ours);
   EXPECT_FALSE(ours.isVoxelOccupiedAtPoint(PointXYZ(5.5f, 5.5f, 5.5f)));
 }
+
+// Not in PCL's suite: the rest of pcl::octree's public API that code written for it calls.
+TEST(OctreeApi, LeavesByKeyNodeIdsAndResetAsPcls) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  Cloud::Ptr cloud(new Cloud);
+  for (int i = 0; i < 300; ++i) cloud->push_back(PointXYZ(u(rng), u(rng), u(rng)));
+  pcl::octree::OctreePointCloud<PointXYZ> ref(0.125);
+  pcl::fot::OctreePointCloud<PointXYZ> ours(0.125);
+  EXPECT_EQ(ours.findLeaf(0, 0, 0), nullptr) << "no box yet";
+  EXPECT_EQ(ours.createLeaf(0, 0, 0), nullptr) << "no box yet";
+  ref.setInputCloud(cloud);
+  ref.addPointsFromInputCloud();
+  ours.setInputCloud(cloud);
+  ours.addPointsFromInputCloud();
+  ASSERT_EQ(ours.getTreeDepth(), ref.getTreeDepth());
+  const uindex_t n = uindex_t(1) << ours.getTreeDepth();
+
+  // findLeaf by key: the same leaves, with the same points; nothing beyond the box.
+  std::size_t found = 0;
+  std::array<uindex_t, 3> empty{n, n, n}, held{n, n, n};
+  for (uindex_t x = 0; x < n; ++x)
+    for (uindex_t y = 0; y < n; ++y)
+      for (uindex_t z = 0; z < n; ++z) {
+        auto* a = ref.findLeaf(x, y, z);
+        auto* b = ours.findLeaf(x, y, z);
+        ASSERT_EQ(a == nullptr, b == nullptr) << x << " " << y << " " << z;
+        (a ? held : empty) = {x, y, z};
+        if (!a) continue;
+        ++found;
+        EXPECT_EQ(a->getPointIndicesVector(), b->getPointIndicesVector());
+      }
+  EXPECT_EQ(found, ref.getLeafCount());
+  ASSERT_LT(empty[0], n);
+  EXPECT_EQ(ours.findLeaf(n, 0, 0), nullptr);
+
+  // createLeaf: an existing leaf's container, or a new empty leaf; nothing beyond the box.
+  EXPECT_EQ(ours.createLeaf(held[0], held[1], held[2]), ours.findLeaf(held[0], held[1], held[2]));
+  ref.createLeaf(empty[0], empty[1], empty[2]);
+  auto* fresh = ours.createLeaf(empty[0], empty[1], empty[2]);
+  ASSERT_NE(fresh, nullptr);
+  EXPECT_EQ(fresh->getSize(), 0u);
+  EXPECT_EQ(fresh, ours.findLeaf(empty[0], empty[1], empty[2]));
+  EXPECT_TRUE(ours.existLeaf(empty[0], empty[1], empty[2]));
+  EXPECT_EQ(ours.createLeaf(0, n, 0), nullptr);
+  EXPECT_EQ(ours.getLeafCount(), ref.getLeafCount());
+  EXPECT_EQ(ours.getBranchCount(), ref.getBranchCount());
+
+  // Iterators: PCL's node ids and operator*, a null node at the end, and reset to the first node.
+  auto a = ref.depth_begin();
+  auto b = ours.depth_begin();
+  for (; a != ref.depth_end(); ++a, ++b) {
+    ASSERT_TRUE(b != ours.depth_end());
+    EXPECT_EQ(b.getNodeID(), a.getNodeID());
+    EXPECT_EQ((*b)->getNodeType(), (*a)->getNodeType());
+  }
+  EXPECT_TRUE(b == ours.depth_end());
+  EXPECT_EQ(*b, nullptr);
+  auto leaf = ours.leaf_breadth_begin();
+  auto ref_leaf = ref.leaf_breadth_begin();
+  for (int i = 0; i < 5; ++i) ++leaf, ++ref_leaf;
+  leaf.reset();
+  ref_leaf.reset();
+  EXPECT_TRUE(leaf == ours.leaf_breadth_begin());
+  EXPECT_EQ(leaf.getNodeID(), ref_leaf.getNodeID());
+  // Branches hold nothing here: they share one empty container.
+  auto branch = ours.begin();
+  ASSERT_TRUE(branch.isBranchNode());
+  auto* first = &branch.getBranchContainer();
+  ++branch;
+  ASSERT_TRUE(branch.isBranchNode());
+  EXPECT_EQ(&branch.getBranchContainer(), first);
+}

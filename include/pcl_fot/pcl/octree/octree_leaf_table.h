@@ -71,6 +71,10 @@ class PCL_EXPORTS OctreeLeafTable {
     NodeWalk(const OctreeLeafTable* table, bool depth_first, Stops stops, uindex_t max_depth);
     /** On to the next node the walk stops at, or to the end. */
     void advance();
+    /** Back to the first node, over the branches as they are now; a walk made at its end stays there. */
+    void reset() {
+      if (table_) *this = NodeWalk(table_, depth_first_, stops_, max_depth_);
+    }
     bool atEnd() const { return at_end_; }
     const Node& node() const { return node_; }
     /** As PCL's iterators: equal when both are at their end, or on nodes of one key at one maximum depth. */

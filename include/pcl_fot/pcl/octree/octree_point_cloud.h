@@ -103,19 +103,36 @@ class OctreePointCloud {
      */
     OctreeNode* getCurrentOctreeNode() const {
       if (walk_.node().leaf) return tree_->leafAt(walk_.node().key, walk_.node().depth);
-      static BranchNode branch;  // branches hold nothing here; one node tells their type
-      return &branch;
+      return &sharedBranch();
     }
+    /** The node it stands on, as getCurrentOctreeNode(); nullptr at the end (PCL's operator*). */
+    OctreeNode* operator*() const { return walk_.atEnd() ? nullptr : getCurrentOctreeNode(); }
     /** The leaf's container; only on a leaf. */
     LeafContainerT& getLeafContainer() const {
       return tree_->leafAt(walk_.node().key, walk_.node().depth)->getContainer();
     }
+    /** A branch's container; only on a branch. Branches hold nothing here: they share one empty container. */
+    BranchContainerT& getBranchContainer() const { return sharedBranch().getContainer(); }
+    /** PCL's node identifier: the node's key, x above y above z, each field the octree's depth wide. */
+    unsigned long getNodeID() const {
+      const octree::OctreeKey& k = walk_.node().key;
+      const uindex_t depth = tree_->getTreeDepth();
+      return static_cast<unsigned long>(k.x) << (2 * depth) | static_cast<unsigned long>(k.y) << depth |
+             static_cast<unsigned long>(k.z);
+    }
+    /** Back to the first node, over the octree as it is now (PCL's reset). */
+    void reset() { walk_.reset(); }
 
    private:
     friend class OctreePointCloud;
     using Stops = OctreeLeafTable::Stops;
     NodeIterator(const OctreePointCloud* tree, bool depth_first, Stops stops, uindex_t max_depth)
         : tree_(tree), walk_(&tree->table_, depth_first, stops, max_depth) {}
+    /** The one node of type BRANCH_NODE that every branch gives: branches hold nothing here. */
+    static BranchNode& sharedBranch() {
+      static BranchNode branch;
+      return branch;
+    }
 
     const OctreePointCloud* tree_ = nullptr;
     OctreeLeafTable::NodeWalk walk_;
@@ -248,6 +265,17 @@ class OctreePointCloud {
   }
   NodeIterator leaf_breadth_end() const { return end(); }
 
+  /**
+   * The container of the leaf at this PCL key, created if there is none (pcl::octree's createLeaf). nullptr,
+   * with PCL_ERROR, before the bounding box is defined or for a key beyond it (where PCL drops the high
+   * bits).
+   */
+  LeafContainerT* createLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg);
+  /**
+   * The container of the leaf holding the voxel at this PCL key (under dynamic depth, the shallow leaf);
+   * nullptr if there is none, or beyond the box.
+   */
+  LeafContainerT* findLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const;
   /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
   bool existLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
     return table_.existLeaf(idx_x_arg, idx_y_arg, idx_z_arg);

@@ -48,6 +48,33 @@ OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeaf(const oct
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+LeafContainerT* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::createLeaf(uindex_t idx_x_arg,
+                                                                                       uindex_t idx_y_arg,
+                                                                                       uindex_t idx_z_arg) {
+  if (!table_.boxDefined()) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::createLeaf] No bounding box is defined yet; no leaf is created.\n");
+    return nullptr;
+  }
+  if (((idx_x_arg | idx_y_arg | idx_z_arg) >> getTreeDepth()) != 0) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud::createLeaf] The key (%u, %u, %u) lies beyond the bounding box "
+        "(depth %u); no leaf is created.\n",
+        idx_x_arg, idx_y_arg, idx_z_arg, getTreeDepth());
+    return nullptr;
+  }
+  return &createLeaf(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))->getContainer();
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+LeafContainerT* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::findLeaf(
+    uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) const {
+  if (!table_.boxDefined() || ((idx_x_arg | idx_y_arg | idx_z_arg) >> getTreeDepth()) != 0) return nullptr;
+  LeafNode* leaf = findLeaf(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg));
+  return leaf ? &leaf->getContainer() : nullptr;
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::expandLeaf(const LeafId& id, Slot slot) {
   Indices indices;
   nodes_[slot].getContainer().getPointIndices(indices);
