@@ -275,8 +275,8 @@ def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, work
               stitch=False, progress=False):
     """Maps the scans tile by tile with Dask, on the cluster at `scheduler` or, without one, on a LocalCluster
     of `workers` processes. Writes the tiles and tiles.json: the tile set is the map (open_tile_set and the
-    tools read it as one). With `stitch`, also the whole map as map.fot, which needs it in one process.
-    Returns the index's tile records, in tile order."""
+    tools read it as one). With `stitch`, also the whole map as map.fot, which needs it in one process;
+    without, an earlier run's map.fot is removed. Returns the index's tile records, in tile order."""
     if not MIN_TILE_LEVEL <= level <= MAX_TILE_LEVEL:
         raise TileSetError("the tile level must be %d to %d, not %d" % (MIN_TILE_LEVEL, MAX_TILE_LEVEL, level))
     if poses is not None and len(poses) != len(scan_paths):
@@ -314,8 +314,11 @@ def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, work
     leftovers += [os.path.join(out_dir, e) for e in os.listdir(out_dir) if e.startswith(".work-")]
     for path in leftovers:
         shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
+    stitched = os.path.join(out_dir, "map.fot")
     if stitch:
-        open_tile_set(out_dir).save(os.path.join(out_dir, "map.fot"))
+        open_tile_set(out_dir).save(stitched)
+    elif os.path.isfile(stitched):  # an earlier run's, which no longer is this tile set's map
+        os.remove(stitched)
     return records
 
 

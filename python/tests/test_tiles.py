@@ -110,6 +110,10 @@ def test_command_line_maps_and_summarises(room_scans, tmp_path, capsys):
                       single_process_map(spec, [s[0] for s in room_scans]))
     assert tiles._main(["info", out]) == 0
     assert "occupied" in capsys.readouterr().out
+    # A later run without --stitch leaves no stale map.fot beside its tile set.
+    tiles.map_tiles([room_scans[0][0]], out, spec, 6, workers=1)
+    assert sorted(os.listdir(out)) == ["tiles", "tiles.json"]
+    assert same_cells(tiles.open_tile_set(out), single_process_map(spec, [room_scans[0][0]]))
 
 
 def test_tools_read_a_tile_set_as_one_map(room_scans, tmp_path, tools_dir):
