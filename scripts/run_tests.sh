@@ -5,10 +5,12 @@
 # without the memory checks.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install_deps.sh
-bash scripts/build.sh
-bash scripts/test_package.sh
-bash scripts/test_python.sh
-bash scripts/test_sanitizers.sh
-bash scripts/test_fuzz.sh
-echo "All tests passed."
+step() {  # <script>: runs it and says how long it took
+  local start=$SECONDS
+  bash "scripts/$1"
+  echo "== $1 took $((SECONDS - start)) s"
+}
+for script in install_deps.sh build.sh test_package.sh test_python.sh test_sanitizers.sh test_fuzz.sh; do
+  step "$script"
+done
+echo "All tests passed in $SECONDS s."

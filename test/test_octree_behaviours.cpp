@@ -1048,3 +1048,41 @@ TEST(OctreeApi, LeavesByKeyNodeIdsAndResetAsPcls) {
   ASSERT_TRUE(branch.isBranchNode());
   EXPECT_EQ(&branch.getBranchContainer(), first);
 }
+
+// Not in PCL's suite: setTreeDepth and setMaxVoxelIndex set the depth until a box is defined, which sets it
+// again; ours refuses them afterwards, where PCL would change the depth without the box.
+TEST(OctreeApi, TreeDepthAndMaxVoxelIndexBeforeTheBoxAsPcls) {
+  pcl::octree::OctreePointCloud<PointXYZ> ref(0.1);
+  pcl::fot::OctreePointCloud<PointXYZ> ours(0.1);
+  for (uindex_t depth : {1u, 7u, 29u}) {
+    ref.setTreeDepth(depth);
+    ours.setTreeDepth(depth);
+    EXPECT_EQ(ours.getTreeDepth(), ref.getTreeDepth());
+  }
+  for (uindex_t index : {2u, 3u, 1000u, 1024u, 1025u, 1u << 29}) {
+    ref.setMaxVoxelIndex(index);
+    ours.setMaxVoxelIndex(index);
+    EXPECT_EQ(ours.getTreeDepth(), ref.getTreeDepth()) << index;
+  }
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  Cloud::Ptr cloud(new Cloud);
+  for (int i = 0; i < 100; ++i) cloud->push_back(PointXYZ(u(rng), u(rng), u(rng)));
+  ref.setInputCloud(cloud);
+  ref.addPointsFromInputCloud();
+  ours.setInputCloud(cloud);
+  ours.addPointsFromInputCloud();
+  const uindex_t depth = ours.getTreeDepth();
+  EXPECT_EQ(depth, ref.getTreeDepth()) << "the box sets the depth again";
+  EXPECT_EQ(ours.getLeafCount(), ref.getLeafCount());
+
+  for (uindex_t bad : {0u, 30u, depth + 1}) ours.setTreeDepth(bad);
+  for (uindex_t bad : {0u, 1u, (1u << 29) + 1}) ours.setMaxVoxelIndex(bad);
+  EXPECT_EQ(ours.getTreeDepth(), depth) << "refused: out of range, or the box is defined";
+  EXPECT_EQ(ours.getLeafCount(), ref.getLeafCount());
+  ref.deleteTree();
+  ours.deleteTree();
+  ref.setTreeDepth(5);
+  ours.setTreeDepth(5);
+  EXPECT_EQ(ours.getTreeDepth(), ref.getTreeDepth()) << "an emptied octree has no box";
+}

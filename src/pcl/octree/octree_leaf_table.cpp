@@ -85,6 +85,24 @@ void OctreeLeafTable::voxelBounds(const octree::OctreeKey& key, uindex_t depth, 
   }
 }
 
+bool OctreeLeafTable::setTreeDepth(uindex_t depth) {
+  if (depth == 0 || depth > kMaxPclDepth) {
+    PCL_ERROR("[pcl::fot::OctreePointCloud] Refused tree depth %u: it must be 1 to %u.\n", depth,
+              kMaxPclDepth);
+    return false;
+  }
+  if (bounding_box_defined_) {
+    PCL_ERROR(
+        "[pcl::fot::OctreePointCloud] Refused tree depth %u: the bounding box, defined already, sets the "
+        "depth.\n",
+        depth);
+    return false;
+  }
+  depth_ = depth;
+  ++version_;
+  return true;
+}
+
 void OctreeLeafTable::getKeyBitSize() {
   // PCL's arithmetic, step for step, so that the box comes out bit for bit the same.
   const float min_value = std::numeric_limits<float>::epsilon();

@@ -117,6 +117,11 @@ class PCL_EXPORTS OctreeLeafTable {
   bool setResolution(double resolution);
   double resolution() const { return resolution_; }
   uindex_t depth() const { return depth_; }
+  /**
+   * PCL's setTreeDepth: only before the bounding box is defined (which then sets the depth again, as in PCL),
+   * and 1 to 29; false (with PCL_ERROR) otherwise. PCL changes the depth of a defined box without the box.
+   */
+  bool setTreeDepth(uindex_t depth);
   bool boxDefined() const { return bounding_box_defined_; }
   void getBoundingBox(double min[3], double max[3]) const;
   /** PCL's defineBoundingBox: only while empty, finite and at most 2^29 cells per axis (else PCL_ERROR). */

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -166,6 +167,12 @@ class OctreePointCloud {
   void setResolution(double resolution_arg);
   double getResolution() const { return table_.resolution(); }
   uindex_t getTreeDepth() const { return table_.depth(); }
+  /** Only before the bounding box is defined, which sets the depth again (as in PCL); 1 to 29. */
+  void setTreeDepth(uindex_t depth_arg) { table_.setTreeDepth(depth_arg); }
+  /** PCL's: the depth whose keys reach this index, ceil(log2(max_voxel_index_arg)), as setTreeDepth. */
+  void setMaxVoxelIndex(uindex_t max_voxel_index_arg) {
+    table_.setTreeDepth(max_voxel_index_arg > 1 ? uindex_t(std::ceil(std::log2(max_voxel_index_arg))) : 0u);
+  }
 
   /** Adds every finite point of the input cloud (or of its indices) to its leaf, in index order. */
   void addPointsFromInputCloud();
