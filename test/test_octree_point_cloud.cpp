@@ -559,3 +559,120 @@ TEST(OctreePointCloudIterators, CompareAsPclsDo) {
   EXPECT_TRUE(it == a.end());
   EXPECT_TRUE(it == it);
 }
+
+namespace {
+
+/**
+ * The occupied voxels a ray crosses, cell by cell, each cell's exit computed from its index as the octree's
+ * walk computes it; that walk jumps over empty octants instead, and must land where these steps land.
+ */
+std::vector<std::array<long, 3>> voxelsStepByStep(const Ours& octree, const Eigen::Vector3f& origin,
+                                                  const Eigen::Vector3f& direction) {
+  double lo[3], hi[3];
+  octree.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  const double res = octree.getResolution(), norm = direction.cast<double>().norm();
+  const long cells = 1L << octree.getTreeDepth();
+  double dir[3], t_in = 0.0, t_out = INFINITY;
+  for (int a = 0; a < 3; ++a) {
+    dir[a] = double(direction[a]) / norm;
+    if (dir[a] == 0.0) {
+      if (origin[a] < lo[a] || origin[a] >= hi[a]) return {};
+      continue;
+    }
+    const double t0 = (lo[a] - origin[a]) / dir[a], t1 = (hi[a] - origin[a]) / dir[a];
+    t_in = std::max(t_in, std::min(t0, t1));
+    t_out = std::min(t_out, std::max(t0, t1));
+  }
+  if (t_in >= t_out) return {};
+  std::array<long, 3> k;
+  for (int a = 0; a < 3; ++a)
+    k[a] = long(std::clamp(std::floor((origin[a] + t_in * dir[a] - lo[a]) / res), 0.0, double(cells - 1)));
+  std::vector<std::array<long, 3>> out;
+  while (std::all_of(k.begin(), k.end(), [&](long c) { return c >= 0 && c < cells; })) {
+    if (octree.existLeaf(pcl::uindex_t(k[0]), pcl::uindex_t(k[1]), pcl::uindex_t(k[2]))) out.push_back(k);
+    int exit = 0;
+    double t_exit = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+      if (dir[a] == 0.0) continue;
+      const double t = ((double(k[a]) + (dir[a] > 0.0 ? 1.0 : 0.0)) * res - (origin[a] - lo[a])) / dir[a];
+      if (t <= t_exit) exit = a, t_exit = t;  // at one distance z goes first, then y
+    }
+    k[exit] += dir[exit] > 0.0 ? 1 : -1;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(OctreePointCloud, RaysJumpOverTheEmptyPartsOfABoxMuchLargerThanTheCloud) {
+  // A 2 m cloud, with a lattice on voxel corners for rays that tie, in a box of 2^14 voxels a side: the walk
+  // jumps over empty octants and over the box around the octree's cells. It lists what steps cell by cell
+  // list, and what PCL's walk lists (up to voxels a ray grazes).
+  std::mt19937 rng(41);
+  const Cloud::Ptr cloud = pcl_fot_test::randomCloud(rng, 2000, 2.0f);
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y) cloud->emplace_back(0.25f * x, 0.25f * y, 1.0f);
+  const double res = 0.05;
+  Ours ours(res);
+  ours.defineBoundingBox(-400.0, -400.0, -400.0, 400.0, 400.0, 400.0);
+  ours.setOccupiedVoxelsAtPointsFromCloud(cloud);
+  ASSERT_GE(ours.getTreeDepth(), 14u);
+  double lo[3], hi[3];  // padded to 2^depth voxels a side
+  ours.getBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  pcl::octree::OctreePointCloudSearch<PointXYZ> ref(res);
+  ref.defineBoundingBox(-400.0, -400.0, -400.0, 400.0, 400.0, 400.0);
+  ref.setInputCloud(cloud);
+  ref.addPointsFromInputCloud();
+
+  std::uniform_real_distribution<float> far(-390.0f, 390.0f);
+  std::uniform_int_distribution<std::size_t> pick(0, cloud->size() - 1);
+  std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> rays;  // origin, direction
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector3f origin(far(rng), far(rng), far(rng));
+    rays.emplace_back(origin, (*cloud)[pick(rng)].getVector3fMap() - origin);
+  }
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3f p = (*cloud)[cloud->size() - 1 - 9 * i].getVector3fMap();
+    rays.emplace_back(Eigen::Vector3f(-390.0f, p.y(), p.z()), Eigen::Vector3f(1, 0, 0));  // along an axis
+    rays.emplace_back(p, Eigen::Vector3f(1, 1, 0));                                       // diagonals
+    rays.emplace_back(p - Eigen::Vector3f(300, 300, 300), Eigen::Vector3f(1, 1, 1));
+    rays.emplace_back(Eigen::Vector3f(-1000.0f, p.y() + 0.3f, p.z()), p - Eigen::Vector3f(-1000, 0, 0));
+  }
+  std::size_t hits = 0;
+  for (const auto& [origin, direction] : rays) {
+    Ours::AlignedPointTVector centres;
+    pcl::octree::OctreePointCloudSearch<PointXYZ>::AlignedPointTVector pcl_centres;
+    ours.getIntersectedVoxelCenters(origin, direction, centres, 0);
+    ref.getIntersectedVoxelCenters(origin, direction, pcl_centres, 0);
+    std::vector<std::array<long, 3>> ours_cells;
+    for (const PointXYZ& c : centres)
+      ours_cells.push_back({long(std::floor((c.x - lo[0]) / res)), long(std::floor((c.y - lo[1]) / res)),
+                            long(std::floor((c.z - lo[2]) / res))});
+    ASSERT_EQ(ours_cells, voxelsStepByStep(ours, origin, direction))
+        << "ray from (" << origin.transpose() << ") along (" << direction.transpose() << ")";
+    expectSameRayAnswer(origin, direction, lo, res, pcl_centres, centres);
+    hits += centres.size();
+  }
+  EXPECT_GT(hits, rays.size() / 2) << "rays aimed at the cloud hit it";
+
+  // At a power-of-two resolution, rays from voxel corners with small integer slopes cross faces of several
+  // axes at one distance, exactly: a jump must break those ties as the steps do.
+  Ours exact(0.0625);
+  exact.defineBoundingBox(-512.0, -512.0, -512.0, 512.0, 512.0, 512.0);
+  exact.setOccupiedVoxelsAtPointsFromCloud(cloud);
+  const std::array<float, 3> slopes[] = {{1, 1, 1}, {1, 2, 0}, {2, 1, 0}, {1, 2, 2}, {-2, 1, 1}, {1, -1, 2}};
+  for (int i = 0; i < 6; ++i)
+    for (const auto& s : slopes) {
+      const Eigen::Vector3f d(s[0], s[1], s[2]);
+      const Eigen::Vector3f origin =
+          Eigen::Vector3f(0.0625f * float(5 * i), 0.25f * float(i), 1.0f) - 100.0f * d;
+      Ours::AlignedPointTVector centres;
+      exact.getIntersectedVoxelCenters(origin, d, centres, 0);
+      std::vector<std::array<long, 3>> cells;
+      for (const PointXYZ& c : centres)
+        cells.push_back({long(std::floor((c.x + 512.0) / 0.0625)), long(std::floor((c.y + 512.0) / 0.0625)),
+                         long(std::floor((c.z + 512.0) / 0.0625))});
+      ASSERT_EQ(cells, voxelsStepByStep(exact, origin, d))
+          << "ray from (" << origin.transpose() << ") along (" << d.transpose() << ")";
+    }
+}

@@ -49,6 +49,17 @@ double buildAndQuery(const Cloud::Ptr& cloud, double res, Query&& query) {
   return query(octree);
 }
 
+/** buildAndQuery in a bounding box defined first, as a user who knows the workspace defines it. */
+template <template <typename...> class Octree, typename Query>
+double buildInBoxAndQuery(const Cloud::Ptr& cloud, double res, const double lo[3], const double hi[3],
+                          Query&& query) {
+  Octree<pcl::PointXYZ> octree(res);
+  octree.defineBoundingBox(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  octree.setInputCloud(cloud);
+  octree.addPointsFromInputCloud();
+  return query(octree);
+}
+
 /**
  * Adds the points one at a time to an empty octree (addPointToCloud), each followed by a search for the
  * next point: nearestKSearch with k = 1, or approxNearestSearch. Returns the sum of the distances.
@@ -207,6 +218,30 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
            }
            return s;
          });
+       }},
+      {"getIntersectedVoxelIndices in a box 64× the cloud's, from its edge", few.size(),
+       [&](bool ours) {
+         // The cloud's box grown 64 times around its centre; rays from near the big box's corner.
+         double big_lo[3], big_hi[3];
+         Eigen::Vector3f origin;
+         for (int a = 0; a < 3; ++a) {
+           const double centre = 0.5 * (lo[a] + hi[a]), half = 32.0 * (hi[a] - lo[a]);
+           big_lo[a] = centre - half;
+           big_hi[a] = centre + half;
+           origin[a] = float(centre - 0.9 * half);
+         }
+         const auto rays = [&](auto& t) {
+           double s = 0;
+           for (const auto& q : few) {
+             dist.clear();
+             t.getIntersectedVoxelIndices(origin, q.getVector3fMap() - origin, idx, 1);
+             sum(s);
+           }
+           return s;
+         };
+         return ours ? buildInBoxAndQuery<pcl::fot::OctreePointCloudSearch>(cloud, res, big_lo, big_hi, rays)
+                     : buildInBoxAndQuery<pcl::octree::OctreePointCloudSearch>(cloud, res, big_lo, big_hi,
+                                                                               rays);
        }},
       {format("add a point, then nearestKSearch k = 1 (%zu times)", growing.size()), growing.size(),
        [&](bool ours) {

@@ -9,7 +9,7 @@
 
 #include <pcl/console/print.h>
 
-#include <pcl_fot/mapping/ray_traversal.h>
+#include <pcl_fot/detail/bits.h>
 #include <pcl_fot/tree/accessor.h>
 
 namespace pcl {
@@ -576,37 +576,61 @@ void OctreeLeafTable::walkRay(const Eigen::Vector3f& origin, const Eigen::Vector
   }
   if (t_in >= t_out) return;
   const std::int64_t cells = std::int64_t(1) << depth_;
-  std::int32_t start[3];
+  std::int64_t k[3];
+  int step[3];
   double rel[3];
   for (int a = 0; a < 3; ++a) {
     const double entry = origin[a] + t_in * dir[a];
-    const double k = std::floor((entry - min_[a]) / resolution_);
-    start[a] = std::int32_t(std::min<double>(std::max<double>(k, 0.0), double(cells - 1)));
+    const double cell = std::floor((entry - min_[a]) / resolution_);
+    k[a] = std::int64_t(std::min<double>(std::max<double>(cell, 0.0), double(cells - 1)));
     rel[a] = double(origin[a]) - min_[a];
+    step[a] = dir[a] > 0.0 ? 1 : (dir[a] < 0.0 ? -1 : 0);
   }
-  const CellGrid box_grid(resolution_);  // PCL's frame: keys counted from the box's lower corner
-  RayWalker walker(box_grid, Key{start[0], start[1], start[2]}, rel, dir);
+  // Where the ray leaves cell j along axis a, computed from j and never accumulated: a jump over an empty
+  // cube then lands in the cell that steps through it would reach.
+  const auto leave = [&](int a, std::int64_t j) {
+    return step[a] == 0 ? std::numeric_limits<double>::infinity()
+                        : ((double(j) + (step[a] > 0 ? 1.0 : 0.0)) * resolution_ - rel[a]) / dir[a];
+  };
+  // Crossings in distance order; at one distance z's comes first, then y's (RayWalker's order).
+  const auto before = [](double t, int a, double u, int b) { return t < u || (t == u && a > b); };
   ConstAccessor cells_of(tree_);
   const NodeWord* words = tree_.words();
-  for (std::int64_t budget = 3 * cells + 3; budget > 0;) {
-    const Key k = walker.key();
-    if (k.x < 0 || k.y < 0 || k.z < 0 || k.x >= cells || k.y >= cells || k.z >= cells) break;
-    const octree::OctreeKey pk(uindex_t(k.x), uindex_t(k.y), uindex_t(k.z));
-    const Key key = pclKeyToTreeKey(pk);
-    const unsigned level = cells_of.locatePath(key);  // 0: outside the tree's root, where nothing is
-    const TreeCoord c(key);
-    const bool occupied =
-        level > 0 && node::state(words[cells_of.pathOffset(level)], c.octant(level)) == CellState::Occupied;
-    if (occupied && !visit(pk)) break;
-    // An empty octant, 2^(level-1) cells per axis, is crossed without reading the tree again: the same
-    // steps, so the same cells afterwards.
-    const unsigned span = occupied || level == 0 ? 0 : level - 1;
-    for (bool inside = true; inside && budget > 0; --budget) {
-      walker.step();
-      const Key w = walker.key();
-      const TreeCoord n(Key{w.x + offset_[0], w.y + offset_[1], w.z + offset_[2]});
-      inside = (((n[0] ^ c[0]) | (n[1] ^ c[1]) | (n[2] ^ c[2])) >> span) == 0;
+  const TreeCoord root = tree_.root().corner;
+  for (std::int64_t budget = 3 * cells + 3; budget > 0; --budget) {
+    if (k[0] < 0 || k[1] < 0 || k[2] < 0 || k[0] >= cells || k[1] >= cells || k[2] >= cells) break;
+    const octree::OctreeKey pk{uindex_t(k[0]), uindex_t(k[1]), uindex_t(k[2])};
+    const TreeCoord c(pclKeyToTreeKey(pk));
+    // The cube around the cell that the ray crosses at once, 2^span cells per axis in tree coordinates: an
+    // empty octant of the tree, or outside the tree's root the largest cube without the root in it.
+    unsigned span = 0;
+    if (const unsigned level = cells_of.locatePath(c.key()); level == 0)
+      span = detail::highestBit((c[0] ^ root[0]) | (c[1] ^ root[1]) | (c[2] ^ root[2]));
+    else if (node::state(words[cells_of.pathOffset(level)], c.octant(level)) != CellState::Occupied)
+      span = level - 1;
+    else if (!visit(pk))
+      break;
+    std::int64_t face[3];
+    double t_face[3];
+    for (int a = 0; a < 3; ++a) {
+      const std::int64_t lo = k[a] - std::int64_t(c[a] & tree_coord::lowMask(span));
+      face[a] = step[a] > 0 ? lo + (std::int64_t(1) << span) - 1 : lo;
+      t_face[a] = leave(a, face[a]);
     }
+    int exit = 0;
+    for (int a = 1; a < 3; ++a)
+      if (before(t_face[a], a, t_face[exit], exit)) exit = a;
+    // On the other axes, the cell holding the ray as it leaves: past each of their crossings before the exit.
+    for (int b = 0; b < 3; ++b) {
+      if (b == exit || step[b] == 0 || span == 0) continue;
+      const std::int64_t lo = std::min(k[b], face[b]), hi = std::max(k[b], face[b]);
+      const double at = std::floor((rel[b] + t_face[exit] * dir[b]) / resolution_);
+      std::int64_t j = std::int64_t(std::min<double>(std::max<double>(at, double(lo)), double(hi)));
+      while (j != face[b] && before(leave(b, j), b, t_face[exit], exit)) j += step[b];
+      while (j != k[b] && !before(leave(b, j - step[b]), b, t_face[exit], exit)) j -= step[b];
+      k[b] = j;
+    }
+    k[exit] = face[exit] + step[exit];
   }
 }
 
