@@ -156,6 +156,11 @@ def test_tools_read_a_tile_set_as_one_map(room_scans, tmp_path, tools_dir):
     (out / "tiles.json").write_text(json.dumps(index))
     typed = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
     assert typed.returncode == 2 and "'origin' takes 3 numbers" in typed.stderr
+    index["origin"] = [12345.5, 0, 0]
+    for not_json in ("0x1p3", "NaN", "Infinity", "012", "1.", "1e"):  # numbers strtod would take
+        (out / "tiles.json").write_text(json.dumps(index).replace("12345.5", not_json))
+        odd = subprocess.run([os.path.join(tools_dir, "fot_info"), str(out)], capture_output=True, text=True)
+        assert odd.returncode == 2 and "not valid JSON" in odd.stderr, not_json
 
 
 class WorkerKiller:

@@ -1,16 +1,20 @@
-// The pcl::octree look-alikes against pcl::octree: each search and the change detector, build plus queries.
+// The pcl::octree look-alikes against pcl::octree: each search, a leaf walk, the centroids and the change
+// detector, build plus queries.
 #include "sections.h"
 
 #include <cstdio>
 #include <functional>
 #include <random>
+#include <type_traits>
 
 #include <pcl/common/point_tests.h>
 #include <pcl/octree/octree_pointcloud_changedetector.h>
+#include <pcl/octree/octree_pointcloud_voxelcentroid.h>
 #include <pcl/octree/octree_search.h>
 
 #include <pcl_fot/pcl/octree/octree_point_cloud_change_detector.h>
 #include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_voxel_centroid.h>
 
 #include "bench_util.h"
 
@@ -252,6 +256,37 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
        [&](bool ours) {
          return ours ? addAndSearch<pcl::fot::OctreePointCloudSearch>(growing, res, true)
                      : addAndSearch<pcl::octree::OctreePointCloudSearch>(growing, res, true);
+       }},
+      {"leaf walk: each leaf's point indices (leaf_depth_begin)", 1,
+       [&](bool ours) {
+         return search(ours, [&](auto& t) {
+           double s = 0;
+           for (auto it = t.leaf_depth_begin(); it != t.leaf_depth_end(); ++it) {
+             idx.clear();
+             dist.clear();
+             it.getLeafContainer().getPointIndices(idx);
+             sum(s);
+           }
+           return s;
+         });
+       }},
+      {"getVoxelCentroids (voxel centroid octree)", 1,
+       [&](bool ours) {
+         const auto centroids = [&](auto& octree) {
+           octree.setInputCloud(cloud);
+           octree.addPointsFromInputCloud();
+           typename std::remove_reference_t<decltype(octree)>::AlignedPointTVector points;
+           octree.getVoxelCentroids(points);
+           double s = 0;
+           for (const auto& p : points) s += double(p.x) + double(p.y) * 1e-3 + double(p.z) * 1e-6;
+           return s;
+         };
+         if (ours) {
+           pcl::fot::OctreePointCloudVoxelCentroid<pcl::PointXYZ> octree(res);
+           return centroids(octree);
+         }
+         pcl::octree::OctreePointCloudVoxelCentroid<pcl::PointXYZ> octree(res);
+         return centroids(octree);
        }},
       {"change detector: both buffers + new voxels", 1,
        [&](bool ours) {

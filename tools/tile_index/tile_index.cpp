@@ -1,5 +1,6 @@
 #include "tile_index.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
@@ -95,14 +96,36 @@ class JsonReader {
     } else if (word("null")) {
       v.type = Json::Type::Null;
     } else {
-      const char* begin = s_.c_str() + i_;
-      char* end = nullptr;
       v.type = Json::Type::Number;
-      v.number = std::strtod(begin, &end);
-      if (end == begin || !std::isfinite(v.number)) fail("a value expected");
-      i_ += std::size_t(end - begin);
+      v.number = number();
     }
     return v;
+  }
+
+  /** JSON's number grammar, checked before strtod, which would also take hex, "inf", "nan" and "1.". */
+  double number() {
+    const std::size_t start = i_;
+    const auto digits = [&] {
+      const std::size_t from = i_;
+      while (i_ < s_.size() && s_[i_] >= '0' && s_[i_] <= '9') ++i_;
+      return i_ - from;
+    };
+    if (i_ < s_.size() && s_[i_] == '-') ++i_;
+    const bool leading_zero = i_ < s_.size() && s_[i_] == '0';
+    const std::size_t whole = digits();
+    if (whole == 0 || (leading_zero && whole > 1)) fail("a value expected");
+    if (i_ < s_.size() && s_[i_] == '.') {
+      ++i_;
+      if (digits() == 0) fail("a digit expected after '.'");
+    }
+    if (i_ < s_.size() && (s_[i_] == 'e' || s_[i_] == 'E')) {
+      ++i_;
+      if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) ++i_;
+      if (digits() == 0) fail("a digit expected in the exponent");
+    }
+    const double x = std::strtod(s_.substr(start, i_ - start).c_str(), nullptr);
+    if (!std::isfinite(x)) fail("a number beyond double's range");
+    return x;
   }
 
   /** A string without escapes other than \" and \\: the index holds file names and words. */
@@ -133,13 +156,10 @@ double integer(const Json& v, const std::string& what) {
 
 /** The numbers of an array of exactly `n`. */
 void numbers(const Json& array, const std::string& name, std::size_t n, double* out) {
-  if (array.items.size() != n)
+  const auto is_number = [](const Json& v) { return v.type == Json::Type::Number; };
+  if (array.items.size() != n || !std::all_of(array.items.begin(), array.items.end(), is_number))
     throw std::invalid_argument("'" + name + "' takes " + std::to_string(n) + " numbers");
-  for (std::size_t i = 0; i < n; ++i) {
-    if (array.items[i].type != Json::Type::Number)
-      throw std::invalid_argument("'" + name + "' takes " + std::to_string(n) + " numbers");
-    out[i] = array.items[i].number;
-  }
+  for (std::size_t i = 0; i < n; ++i) out[i] = array.items[i].number;
 }
 
 TileIndex::Tile tile(const Json& v) {

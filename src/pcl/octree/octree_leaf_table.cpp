@@ -19,6 +19,53 @@ namespace {
 /** The deepest box the adapter follows PCL to: 2^29 cells per axis keeps tree keys in range. */
 constexpr uindex_t kMaxPclDepth = 29;
 
+/** What the walks' node array is made of: a leaf, or an empty old root (no slot), by its first voxel's key.
+ */
+struct WalkItem {
+  std::uint32_t key[3];
+  std::uint32_t level;
+  OctreeLeafTable::Slot slot;
+};
+
+/** Morton order in PCL's child order (x above y above z at each depth); at one corner, bigger cubes first. */
+bool mortonLess(const WalkItem& a, const WalkItem& b) {
+  unsigned axis = 0;
+  std::uint32_t top = a.key[0] ^ b.key[0];
+  for (unsigned i = 1; i < 3; ++i) {
+    // The axis whose keys differ in the highest bit decides; x wins a tie, then y.
+    const std::uint32_t d = a.key[i] ^ b.key[i];
+    if (top < d && top < (top ^ d)) axis = i, top = d;
+  }
+  return top != 0 ? a.key[axis] < b.key[axis] : a.level > b.level;
+}
+
+/** PCL's index of the child holding the item's cube, in its node `level` + 1 levels above the voxels. */
+unsigned childOf(const WalkItem& item, std::uint32_t level) {
+  return (item.key[0] >> level & 1u) << 2 | (item.key[1] >> level & 1u) << 1 | (item.key[2] >> level & 1u);
+}
+
+/** Fills node `at` of the array, 2^level voxels a side, from its items [lo, hi), in Morton order. */
+void fillNode(OctreeLeafTable::NodeArray& nodes, std::size_t at, const std::vector<WalkItem>& items,
+              std::size_t lo, std::size_t hi, std::uint32_t level) {
+  for (; lo < hi && items[lo].level == level; ++lo)
+    if (items[lo].slot != OctreeLeafTable::kNoLeaf) {
+      nodes[at] = OctreeLeafTable::FlatNode{items[lo].slot, 0, true};
+      return;
+    }  // else an empty old root, which PCL keeps as a branch over whatever lies below it
+  std::uint8_t children = 0;
+  for (std::size_t i = lo; i < hi; ++i) children |= std::uint8_t(1u << childOf(items[i], level - 1));
+  const std::uint32_t first = std::uint32_t(nodes.size());
+  nodes[at] = OctreeLeafTable::FlatNode{first, children, false};
+  nodes.resize(first + detail::popcount64(children));
+  for (std::size_t i = lo, rank = 0; i < hi; ++rank) {
+    const unsigned child = childOf(items[i], level - 1);
+    std::size_t end = i;
+    while (end < hi && childOf(items[end], level - 1) == child) ++end;
+    fillNode(nodes, first + rank, items, i, end, level - 1);
+    i = end;
+  }
+}
+
 }  // namespace
 
 std::size_t OctreeLeafTable::LeafIdHash::operator()(const LeafId& id) const {
@@ -304,8 +351,8 @@ OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bo
       created = new_node = true;
     }
   }
-  // The branch index of the last walk follows a new leaf in place: adding a point and then walking or
-  // searching again costs what the change costs.
+  // The branch index follows a new leaf in place: adding a point and then searching approximately or
+  // counting branches again costs what the change costs. Walks build their node array anew.
   branch_cache_.follow(before, version_, [&](BranchIndex& index) {
     if (new_node) addToBranches(index, id);
   });
@@ -374,8 +421,8 @@ void OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
     removed = tree_.getCell(target) == CellState::Occupied;
     tree_.eraseCell(target);
   }
-  // The branch index of the last walk follows, unless empty old roots are about: their pruning below is
-  // left to a new index.
+  // The branch index follows, unless empty old roots are about: their pruning below is left to a new
+  // index.
   if (phantoms_.empty())
     branch_cache_.follow(before, version_, [&](BranchIndex& index) {
       if (removed) removeFromBranches(index, gone);
@@ -470,6 +517,33 @@ std::shared_ptr<OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex(
     addToBranches(*index, cube);
   }
   return index;
+}
+
+std::shared_ptr<const OctreeLeafTable::NodeArray> OctreeLeafTable::nodeArray() const {
+  return node_cache_.get(version_, [&] { return buildNodeArray(); });
+}
+
+std::shared_ptr<OctreeLeafTable::NodeArray> OctreeLeafTable::buildNodeArray() const {
+  // The leaves sorted in Morton order, then split depth by depth: no look-up per node.
+  std::vector<WalkItem> items;
+  const auto add = [&](const Key& corner, std::uint32_t level, Slot slot) {
+    items.push_back(WalkItem{{std::uint32_t(corner.x - offset_[0]), std::uint32_t(corner.y - offset_[1]),
+                              std::uint32_t(corner.z - offset_[2])},
+                             level,
+                             slot});
+  };
+  if (holds_leaves_) {
+    items.reserve(leaves_.size() + phantoms_.size());
+    for (const auto& [id, slot] : leaves_) add(id.corner, id.level, slot);
+  } else {
+    tree_.forEachCell(CellState::Occupied, [&](const Key& k) { add(k, 0, 0); });
+  }
+  // PCL keeps the empty old roots of a box grown before any point as branches.
+  for (const Phantom& ph : phantoms_) add(ph.min, std::uint32_t(ph.level), kNoLeaf);
+  std::sort(items.begin(), items.end(), mortonLess);
+  auto nodes = std::make_shared<NodeArray>(1);
+  fillNode(*nodes, 0, items, 0, items.size(), depth_);
+  return nodes;
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::approxLeaf(const Eigen::Vector3f& point) const {
@@ -637,19 +711,19 @@ void OctreeLeafTable::walkRay(const Eigen::Vector3f& origin, const Eigen::Vector
 OctreeLeafTable::NodeWalk::NodeWalk(const OctreeLeafTable* table, bool depth_first, Stops stops,
                                     uindex_t max_depth)
     : table_(table),
-      branches_(table->branchIndex()),
+      nodes_(table->nodeArray()),
       depth_first_(depth_first),
       stops_(stops),
       max_depth_(max_depth) {
-  pending_.push_back(nodeAt(octree::OctreeKey(0, 0, 0), 0));
+  pending_.push_back(nodeAt(octree::OctreeKey(0, 0, 0), 0, 0));
   at_end_ = false;
   advance();
 }
 
-OctreeLeafTable::Node OctreeLeafTable::NodeWalk::nodeAt(const octree::OctreeKey& key, uindex_t depth) const {
-  const std::uint32_t level = table_->depth_ - depth;
-  const auto it = branches_->find(LeafId{table_->pclKeyToTreeKey(firstVoxel(key, level)), level});
-  return it != branches_->end() ? Node{key, depth, it->second, false} : Node{key, depth, 0, true};
+OctreeLeafTable::Node OctreeLeafTable::NodeWalk::nodeAt(const octree::OctreeKey& key, uindex_t depth,
+                                                        std::uint32_t at) const {
+  const FlatNode& n = (*nodes_)[at];
+  return n.leaf ? Node{key, depth, 0, true, n.first, at} : Node{key, depth, n.children, false, kNoLeaf, at};
 }
 
 void OctreeLeafTable::NodeWalk::advance() {
@@ -664,9 +738,12 @@ void OctreeLeafTable::NodeWalk::advance() {
     }
     if (!node_.leaf && node_.depth < limit) {
       // Children in PCL's order: depth first pushes them last to first, so the first comes out first.
+      const std::uint32_t first = (*nodes_)[node_.at].first;
       for (unsigned i = 0; i < 8; ++i) {
         const unsigned c = depth_first_ ? 7 - i : i;
-        if (node_.children >> c & 1u) pending_.push_back(nodeAt(childKey(node_.key, c), node_.depth + 1));
+        if (!(node_.children >> c & 1u)) continue;
+        const std::uint32_t rank = detail::popcount64(node_.children & ((1u << c) - 1u));
+        pending_.push_back(nodeAt(childKey(node_.key, c), node_.depth + 1, first + rank));
       }
     }
     if (stops_ == Stops::All || (stops_ == Stops::Leaves && node_.leaf) ||

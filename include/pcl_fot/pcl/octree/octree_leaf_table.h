@@ -55,10 +55,23 @@ class PCL_EXPORTS OctreeLeafTable {
     uindex_t depth;
     std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf
     bool leaf;
+    Slot slot;         // a leaf's slot (0 for the occupancy octree's cells); kNoLeaf for a branch
+    std::uint32_t at;  // its place in the walk's node array
   };
 
   /** Which nodes a walk stops at. */
   enum class Stops : std::uint8_t { All, Leaves, OneDepth };
+
+  /**
+   * pcl::octree's nodes as one array, for walks without look-ups: a branch's children sit together in PCL's
+   * order from `first`; a leaf keeps its slot there.
+   */
+  struct FlatNode {
+    std::uint32_t first;    // a branch's first child; a leaf's slot
+    std::uint8_t children;  // PCL's child bit pattern; 0 for a leaf or an empty branch
+    bool leaf;
+  };
+  using NodeArray = std::vector<FlatNode>;
 
   /**
    * Walks pcl::octree's nodes in the order of the PCL iterator it stands for: depth first (children in
@@ -84,11 +97,11 @@ class PCL_EXPORTS OctreeLeafTable {
     }
 
    private:
-    /** The node at this key and depth: a branch of the index, else a leaf. */
-    Node nodeAt(const octree::OctreeKey& key, uindex_t depth) const;
+    /** The node at this key and depth, at this place of the node array. */
+    Node nodeAt(const octree::OctreeKey& key, uindex_t depth, std::uint32_t at) const;
 
     const OctreeLeafTable* table_ = nullptr;
-    std::shared_ptr<const BranchIndex> branches_;
+    std::shared_ptr<const NodeArray> nodes_;
     bool depth_first_ = true;
     Stops stops_ = Stops::All;
     uindex_t max_depth_ = 0;
@@ -225,6 +238,9 @@ class PCL_EXPORTS OctreeLeafTable {
   Slot addLeaf(const LeafId& id);
   void getKeyBitSize();
   std::shared_ptr<BranchIndex> buildBranchIndex() const;
+  /** The walks' node array, built from the leaves at the first walk after a change. */
+  std::shared_ptr<const NodeArray> nodeArray() const;
+  std::shared_ptr<NodeArray> buildNodeArray() const;
   /** The node's place among its parent's children, in PCL's order. */
   unsigned childIndex(const LeafId& node) const;
   /** Marks the node (a leaf's cube) in its parent, and each new parent in its own, up to the root. */
@@ -247,7 +263,8 @@ class PCL_EXPORTS OctreeLeafTable {
   Slot last_slot_ = kNoLeaf;
   std::size_t max_objs_per_leaf_ = 0;  // 0: no dynamic depth
   std::uint64_t version_ = 0;
-  mutable detail::VersionCache<BranchIndex> branch_cache_;  // the branch index of the last walk
+  mutable detail::VersionCache<BranchIndex> branch_cache_;  // for the branch count and the approximate search
+  mutable detail::VersionCache<NodeArray> node_cache_;      // the node array of the last walk
   /**
    * Growing the box of an octree without voxels leaves PCL's old root behind as an empty branch, which
    * only a deletion beneath it removes. These nested cubes (tree keys) keep branchCount exact.

@@ -103,15 +103,13 @@ class OctreePointCloud {
      * branches share (branches hold nothing here).
      */
     OctreeNode* getCurrentOctreeNode() const {
-      if (walk_.node().leaf) return tree_->leafAt(walk_.node().key, walk_.node().depth);
+      if (walk_.node().leaf) return tree_->node(walk_.node().slot);
       return &sharedBranch();
     }
     /** The node it stands on, as getCurrentOctreeNode(); nullptr at the end (PCL's operator*). */
     OctreeNode* operator*() const { return walk_.atEnd() ? nullptr : getCurrentOctreeNode(); }
     /** The leaf's container; only on a leaf. */
-    LeafContainerT& getLeafContainer() const {
-      return tree_->leafAt(walk_.node().key, walk_.node().depth)->getContainer();
-    }
+    LeafContainerT& getLeafContainer() const { return tree_->node(walk_.node().slot)->getContainer(); }
     /** A branch's container; only on a branch. Branches hold nothing here: they share one empty container. */
     BranchContainerT& getBranchContainer() const { return sharedBranch().getContainer(); }
     /** PCL's node identifier: the node's key, x above y above z, each field the octree's depth wide. */
