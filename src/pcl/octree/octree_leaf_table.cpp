@@ -540,7 +540,9 @@ std::shared_ptr<OctreeLeafTable::NodeArray> OctreeLeafTable::buildNodeArray() co
   }
   // PCL keeps the empty old roots of a box grown before any point as branches.
   for (const Phantom& ph : phantoms_) add(ph.min, std::uint32_t(ph.level), kNoLeaf);
-  std::sort(items.begin(), items.end(), mortonLess);
+  // A lambda, not the function's address: the sort inlines it.
+  std::sort(items.begin(), items.end(),
+            [](const WalkItem& a, const WalkItem& b) { return mortonLess(a, b); });
   auto nodes = std::make_shared<NodeArray>(1);
   fillNode(*nodes, 0, items, 0, items.size(), depth_);
   return nodes;
@@ -728,13 +730,16 @@ OctreeLeafTable::Node OctreeLeafTable::NodeWalk::nodeAt(const octree::OctreeKey&
 
 void OctreeLeafTable::NodeWalk::advance() {
   const uindex_t limit = std::min(max_depth_, table_->depth_);
-  while (!pending_.empty()) {
+  while (head_ < pending_.size()) {
     if (depth_first_) {
       node_ = pending_.back();
       pending_.pop_back();
     } else {
-      node_ = pending_.front();
-      pending_.pop_front();
+      node_ = pending_[head_++];
+      if (head_ > 1024 && 2 * head_ > pending_.size()) {  // drop the visited half: memory follows the queue
+        pending_.erase(pending_.begin(), pending_.begin() + std::ptrdiff_t(head_));
+        head_ = 0;
+      }
     }
     if (!node_.leaf && node_.depth < limit) {
       // Children in PCL's order: depth first pushes them last to first, so the first comes out first.

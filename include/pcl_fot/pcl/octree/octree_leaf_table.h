@@ -3,7 +3,6 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <unordered_map>
@@ -108,8 +107,10 @@ class PCL_EXPORTS OctreeLeafTable {
     Node node_{};
     bool at_end_ = true;
     // The nodes still to visit: depth first takes the last (children pushed last to first), breadth first
-    // the first.
-    std::deque<Node> pending_;
+    // the one at head_. A vector, not a deque: an iterator at the end, made at every loop test against
+    // end(), allocates nothing.
+    std::vector<Node> pending_;
+    std::size_t head_ = 0;
   };
 
   /** Throws std::invalid_argument for a resolution CellGrid refuses (PCL asserts). */
