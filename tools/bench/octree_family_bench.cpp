@@ -273,20 +273,14 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
       {"getVoxelCentroids (voxel centroid octree)", 1,
        [&](bool ours) {
          const auto centroids = [&](auto& octree) {
-           octree.setInputCloud(cloud);
-           octree.addPointsFromInputCloud();
            typename std::remove_reference_t<decltype(octree)>::AlignedPointTVector points;
            octree.getVoxelCentroids(points);
            double s = 0;
            for (const auto& p : points) s += double(p.x) + double(p.y) * 1e-3 + double(p.z) * 1e-6;
            return s;
          };
-         if (ours) {
-           pcl::fot::OctreePointCloudVoxelCentroid<pcl::PointXYZ> octree(res);
-           return centroids(octree);
-         }
-         pcl::octree::OctreePointCloudVoxelCentroid<pcl::PointXYZ> octree(res);
-         return centroids(octree);
+         return ours ? buildAndQuery<pcl::fot::OctreePointCloudVoxelCentroid>(cloud, res, centroids)
+                     : buildAndQuery<pcl::octree::OctreePointCloudVoxelCentroid>(cloud, res, centroids);
        }},
       {"change detector: both buffers + new voxels", 1,
        [&](bool ours) {
