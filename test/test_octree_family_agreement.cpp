@@ -46,6 +46,20 @@ void expectSameLeaves(Reference& ref, Ours& ours) {
   EXPECT_TRUE(o == ours.leaf_depth_end());
 }
 
+/** Every node of both octrees, depth first: the same keys, depths and kinds. */
+template <typename Reference, typename Ours>
+void expectSameNodes(Reference& ref, Ours& ours) {
+  auto r = ref.depth_begin();
+  auto o = ours.depth_begin();
+  for (std::size_t n = 0; r != ref.depth_end(); ++r, ++o, ++n) {
+    ASSERT_TRUE(o != ours.depth_end()) << "ours ends after " << n << " nodes";
+    ASSERT_EQ(r.getCurrentOctreeKey(), o.getCurrentOctreeKey()) << "node " << n;
+    ASSERT_EQ(r.getCurrentOctreeDepth(), o.getCurrentOctreeDepth()) << "node " << n;
+    ASSERT_EQ(r.isLeafNode(), o.isLeafNode()) << "node " << n;
+  }
+  EXPECT_TRUE(o == ours.depth_end());
+}
+
 /** Every point four times over, in a few voxels: crowded leaves, duplicates. */
 Cloud::Ptr crowdedCloud() {
   Cloud::Ptr cloud(new Cloud);
@@ -240,4 +254,63 @@ TEST_P(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
     EXPECT_EQ(boost::num_vertices(rg), boost::num_vertices(og));
     EXPECT_EQ(boost::num_edges(rg), boost::num_edges(og));
   }
+}
+
+namespace {
+
+/** A user's octree that adds points its own way: it must see every point addPointsFromInputCloud adds. */
+class CountingPointVector : public pcl::fot::OctreePointCloudPointVector<PointXYZ> {
+ public:
+  using pcl::fot::OctreePointCloudPointVector<PointXYZ>::OctreePointCloudPointVector;
+  std::size_t added = 0;
+
+ protected:
+  void addPointIdx(pcl::uindex_t point_idx_arg) override {
+    ++added;
+    pcl::fot::OctreePointCloudPointVector<PointXYZ>::addPointIdx(point_idx_arg);
+  }
+};
+
+}  // namespace
+
+TEST(OctreeFamilyAgreement, ACloudAddedAtOnceGrowsAndFillsAsPointByPoint) {
+  // The first point alone, then points that grow the box down and up, duplicates, NaNs, and a second call
+  // through indices (repeats included) into the filled octree: addPointsFromInputCloud sorts the points
+  // into their leaves, and must leave what PCL's point-by-point insertion leaves.
+  Cloud::Ptr cloud(new Cloud);
+  std::mt19937 rng(46);
+  std::uniform_real_distribution<float> near(-0.3f, 0.3f);
+  cloud->emplace_back(0.01f, 0.02f, 0.03f);
+  for (int i = 0; i < 3000; ++i) {
+    const float far = i % 500 == 0 ? -40.0f + 0.03f * i : 1.0f;
+    cloud->emplace_back(near(rng) * far, near(rng), near(rng) * (i % 3 == 0 ? 9.0f : 1.0f));
+    if (i % 97 == 0) cloud->push_back(cloud->back());
+    if (i % 211 == 0) cloud->emplace_back(NAN, 0.0f, 0.0f);
+  }
+  pcl::octree::OctreePointCloudPointVector<PointXYZ> ref(0.02);
+  pcl::fot::OctreePointCloudPointVector<PointXYZ> ours(0.02);
+  CountingPointVector counting(0.02);
+  pcl_fot_test::fillBoth(ref, ours, cloud);
+  counting.setInputCloud(cloud);
+  counting.addPointsFromInputCloud();
+  expectSameLeaves(ref, ours);
+  expectSameLeaves(ref, counting);
+  expectSameNodes(ref, ours);
+  std::size_t finite = 0;
+  for (const auto& p : *cloud) finite += pcl::isFinite(p);
+  EXPECT_EQ(counting.added, finite);
+
+  pcl::IndicesPtr indices(new Indices);
+  for (int i = 0; i < 2000; i += 3) indices->push_back((i * 7919) % static_cast<int>(cloud->size()));
+  indices->push_back(indices->front());
+  for (auto* octree : {static_cast<pcl::fot::OctreePointCloudPointVector<PointXYZ>*>(&ours),
+                       static_cast<pcl::fot::OctreePointCloudPointVector<PointXYZ>*>(&counting)})
+    octree->setInputCloud(cloud, indices);
+  ref.setInputCloud(cloud, indices);
+  ref.addPointsFromInputCloud();
+  ours.addPointsFromInputCloud();
+  counting.addPointsFromInputCloud();
+  expectSameLeaves(ref, ours);
+  expectSameLeaves(ref, counting);
+  expectSameNodes(ref, ours);
 }

@@ -75,6 +75,68 @@ std::size_t OctreeLeafTable::LeafIdHash::operator()(const LeafId& id) const {
   return std::size_t(h ^ (h >> 29));
 }
 
+OctreeLeafTable::Slot OctreeLeafTable::LeafMap::find(const LeafId& id) const {
+  if (size_ == 0) return kNoLeaf;
+  for (std::size_t i = home(id);; i = (i + 1) & (entries_.size() - 1)) {
+    const Entry& e = entries_[i];
+    if (e.slot == kNoLeaf || e.id == id) return e.slot;
+  }
+}
+
+void OctreeLeafTable::LeafMap::insert(const LeafId& id, Slot slot) {
+  findOrAdd(id) = slot;
+}
+
+OctreeLeafTable::Slot& OctreeLeafTable::LeafMap::findOrAdd(const LeafId& id) {
+  if (2 * (size_ + 1) > entries_.size()) grow(std::max<std::size_t>(16, 2 * entries_.size()));
+  std::size_t i = home(id);
+  while (entries_[i].slot != kNoLeaf && !(entries_[i].id == id)) i = (i + 1) & (entries_.size() - 1);
+  if (entries_[i].slot == kNoLeaf) {
+    entries_[i].id = id;
+    ++size_;
+  }
+  return entries_[i].slot;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::LeafMap::erase(const LeafId& id) {
+  if (size_ == 0) return kNoLeaf;
+  const std::size_t mask = entries_.size() - 1;
+  std::size_t i = home(id);
+  while (entries_[i].slot != kNoLeaf && !(entries_[i].id == id)) i = (i + 1) & mask;
+  const Slot slot = entries_[i].slot;
+  if (slot == kNoLeaf) return kNoLeaf;
+  // Backward shift: an entry after the hole moves into it unless its home lies between the hole and it.
+  for (std::size_t j = (i + 1) & mask; entries_[j].slot != kNoLeaf; j = (j + 1) & mask) {
+    const std::size_t h = home(entries_[j].id);
+    if (((j - h) & mask) >= ((j - i) & mask)) {
+      entries_[i] = entries_[j];
+      i = j;
+    }
+  }
+  entries_[i] = Entry{};
+  --size_;
+  return slot;
+}
+
+void OctreeLeafTable::LeafMap::clear() {
+  entries_.clear();
+  size_ = 0;
+}
+
+void OctreeLeafTable::LeafMap::reserve(std::size_t n) {
+  std::size_t capacity = 16;
+  while (capacity < 2 * n) capacity *= 2;
+  if (capacity > entries_.size()) grow(capacity);
+}
+
+void OctreeLeafTable::LeafMap::grow(std::size_t capacity) {
+  std::vector<Entry> old(capacity);
+  old.swap(entries_);
+  size_ = 0;
+  for (const Entry& e : old)
+    if (e.slot != kNoLeaf) insert(e.id, e.slot);
+}
+
 OctreeLeafTable::OctreeLeafTable(double resolution, bool holds_leaves)
     : resolution_(resolution), holds_leaves_(holds_leaves), tree_(resolution) {
   max_[0] = max_[1] = max_[2] = resolution;
@@ -295,28 +357,71 @@ bool OctreeLeafTable::cubeHasContent(const LeafId& cube) const {
 OctreeLeafTable::Slot OctreeLeafTable::leafOnPath(const Key& k, LeafId& id) const {
   if (max_objs_per_leaf_ == 0) {
     id = LeafId{k, 0};
-    const auto it = leaves_.find(id);
-    return it == leaves_.end() ? kNoLeaf : it->second;
+    return leaves_.find(id);
   }
   // PCL's descent: the root is a branch; below it, the first leaf, or the first node missing.
   for (std::uint32_t level = depth_ - 1;; --level) {
     id = cubeOf(k, level);
-    const auto it = leaves_.find(id);
-    if (it != leaves_.end()) return it->second;
+    const Slot slot = leaves_.find(id);
+    if (slot != kNoLeaf) return slot;
     if (level == 0 || !cubeHasContent(id)) return kNoLeaf;
   }
 }
 
-OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
-  Slot slot = next_slot_;
-  if (!free_slots_.empty()) {
-    slot = free_slots_.back();
-    free_slots_.pop_back();
-  } else {
-    ++next_slot_;
-  }
-  leaves_.emplace(id, slot);
+OctreeLeafTable::Slot OctreeLeafTable::takeSlot() {
+  if (free_slots_.empty()) return next_slot_++;
+  const Slot slot = free_slots_.back();
+  free_slots_.pop_back();
   return slot;
+}
+
+OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
+  const Slot slot = takeSlot();
+  leaves_.insert(id, slot);
+  return slot;
+}
+
+std::vector<std::uint32_t> OctreeLeafTable::cellOrder(const std::vector<Key>& keys) {
+  const std::size_t n = keys.size();
+  std::vector<std::uint32_t> order(n), scratch(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+  if (n < 2) return order;
+  // Each key as one number: its offsets from the lowest key on each axis, side by side.
+  std::int64_t lo[3] = {keys[0].x, keys[0].y, keys[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (const Key& k : keys) {
+    const std::int64_t c[3] = {k.x, k.y, k.z};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+  }
+  unsigned bits = 0;
+  for (int a = 0; a < 3; ++a)
+    while ((hi[a] - lo[a]) >> bits != 0) ++bits;
+  const auto packed = [&](const Key& k) {
+    return std::uint64_t(k.x - lo[0]) << (2 * bits) | std::uint64_t(k.y - lo[1]) << bits |
+           std::uint64_t(k.z - lo[2]);
+  };
+  if (3 * bits > 64) {  // the box spans more than 2^21 cells: a comparison sort
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return std::tie(keys[a].x, keys[a].y, keys[a].z) < std::tie(keys[b].x, keys[b].y, keys[b].z);
+    });
+    return order;
+  }
+  std::vector<std::uint64_t> value(n), value_scratch(n);
+  for (std::size_t i = 0; i < n; ++i) value[i] = packed(keys[i]);
+  // Least significant digit first, 11 bits a pass; each pass is stable, so equal keys keep their order.
+  constexpr unsigned kDigit = 11;
+  for (unsigned shift = 0; shift < 3 * bits; shift += kDigit) {
+    std::vector<std::uint32_t> start((1u << kDigit) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[(value[i] >> shift & ((1u << kDigit) - 1)) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t at = start[value[i] >> shift & ((1u << kDigit) - 1)]++;
+      value_scratch[at] = value[i];
+      scratch[at] = order[i];
+    }
+    value.swap(value_scratch);
+    order.swap(scratch);
+  }
+  return order;
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bool& created) {
@@ -334,13 +439,13 @@ OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bo
     if (last_slot_ != kNoLeaf && last_id_ == id) {
       slot = last_slot_;
     } else {
-      const auto it = leaves_.find(id);
-      slot = it == leaves_.end() ? kNoLeaf : it->second;
-      if (slot == kNoLeaf) {
-        slot = addLeaf(id);
+      Slot& entry = leaves_.findOrAdd(id);
+      if (entry == kNoLeaf) {
+        entry = takeSlot();
         created = new_node = true;
         tree_.setCell(k, CellState::Occupied);
       }
+      slot = entry;
       last_id_ = id;
       last_slot_ = slot;
     }
@@ -368,18 +473,17 @@ OctreeLeafTable::Slot OctreeLeafTable::createLeaf(const octree::OctreeKey& key, 
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::leafOfCube(const LeafId& id, bool& created) {
-  const auto it = leaves_.find(id);
-  created = it == leaves_.end();
-  return created ? addLeaf(id) : it->second;
+  const Slot slot = leaves_.find(id);
+  created = slot == kNoLeaf;
+  return created ? addLeaf(id) : slot;
 }
 
 void OctreeLeafTable::eraseLeaf(const LeafId& id) {
-  const auto it = leaves_.find(id);
-  if (it == leaves_.end()) return;
+  const Slot slot = leaves_.erase(id);
+  if (slot == kNoLeaf) return;
   ++version_;
-  free_slots_.push_back(it->second);
-  if (last_slot_ == it->second) last_slot_ = kNoLeaf;
-  leaves_.erase(it);
+  free_slots_.push_back(slot);
+  if (last_slot_ == slot) last_slot_ = kNoLeaf;
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::findLeaf(const octree::OctreeKey& key) const {
@@ -393,8 +497,7 @@ OctreeLeafTable::Slot OctreeLeafTable::leafAt(const octree::OctreeKey& key, uind
   const Key corner = pclKeyToTreeKey(firstVoxel(key, level));
   if (!holds_leaves_)  // the occupancy octree's leaves are its cells
     return level == 0 && tree_.getCell(corner) == CellState::Occupied ? 0 : kNoLeaf;
-  const auto it = leaves_.find(LeafId{corner, level});
-  return it == leaves_.end() ? kNoLeaf : it->second;
+  return leaves_.find(LeafId{corner, level});
 }
 
 bool OctreeLeafTable::existLeaf(uindex_t x, uindex_t y, uindex_t z) const {
@@ -507,7 +610,7 @@ std::shared_ptr<OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex(
   const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
   index->emplace(root, 0);
   if (holds_leaves_)
-    for (const auto& leaf : leaves_) addToBranches(*index, leaf.first);
+    leaves_.forEach([&](const LeafId& id, Slot) { addToBranches(*index, id); });
   else
     tree_.forEachCell(CellState::Occupied, [&](const Key& k) { addToBranches(*index, LeafId{k, 0}); });
   // PCL keeps the empty old roots of a box grown before any point as branches.
@@ -534,7 +637,7 @@ std::shared_ptr<OctreeLeafTable::NodeArray> OctreeLeafTable::buildNodeArray() co
   };
   if (holds_leaves_) {
     items.reserve(leaves_.size() + phantoms_.size());
-    for (const auto& [id, slot] : leaves_) add(id.corner, id.level, slot);
+    leaves_.forEach([&](const LeafId& id, Slot slot) { add(id.corner, id.level, slot); });
   } else {
     tree_.forEachCell(CellState::Occupied, [&](const Key& k) { add(k, 0, 0); });
   }

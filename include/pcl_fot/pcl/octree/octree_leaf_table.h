@@ -187,6 +187,30 @@ class PCL_EXPORTS OctreeLeafTable {
    */
   Slot leafForPoint(const Key& k, LeafId& id, bool& created);
   void markCell(const Key& k) { tree_.setCell(k, CellState::Occupied); }
+  /**
+   * The leaves of many points at once, as leafForPoint finds or makes them point by point, without dynamic
+   * depth: the keys are sorted, so that each leaf costs one look-up rather than each point. Calls
+   * visit(slot, created, first, last) once per leaf, with the positions [first, last) into `keys` of its
+   * points, in the order of `keys`.
+   */
+  template <typename Visit>
+  void leavesOfKeys(const std::vector<Key>& keys, Visit&& visit) {
+    const std::vector<std::uint32_t> order = cellOrder(keys);
+    const auto sameCell = [&](std::size_t i, std::size_t j) {
+      const Key &a = keys[order[i]], &b = keys[order[j]];
+      return a.x == b.x && a.y == b.y && a.z == b.z;
+    };
+    std::size_t runs = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) runs += i == 0 || !sameCell(i - 1, i);
+    leaves_.reserve(leaves_.size() + runs);
+    for (std::size_t begin = 0, end; begin < order.size(); begin = end) {
+      for (end = begin + 1; end < order.size() && sameCell(begin, end);) ++end;
+      LeafId id;
+      bool created;
+      const Slot slot = leafForPoint(keys[order[begin]], id, created);
+      visit(slot, created, order.data() + begin, order.data() + end);
+    }
+  }
   /** The leaf of this cube, created if there is none (PCL's expandLeafNode fills new leaves this way). */
   Slot leafOfCube(const LeafId& id, bool& created);
   /** Takes a leaf out of the table (PCL's expandLeafNode: its points go to new leaves); its slot is freed. */
@@ -204,7 +228,7 @@ class PCL_EXPORTS OctreeLeafTable {
   /** Calls visit(slot) for every leaf, in no particular order. */
   template <typename Visit>
   void forEachLeaf(Visit&& visit) const {
-    for (const auto& leaf : leaves_) visit(leaf.second);
+    leaves_.forEach([&](const LeafId&, Slot slot) { visit(slot); });
   }
 
   // Walks.
@@ -230,6 +254,47 @@ class PCL_EXPORTS OctreeLeafTable {
                    const std::function<void(const octree::OctreeKey&)>& visit) const;
 
  private:
+  /**
+   * The leaves by cube, open addressing with linear probing: a look-up reads one or two cache lines and a
+   * leaf costs no allocation (a node-based map's look-ups and allocations were a third of a build).
+   */
+  class LeafMap {
+   public:
+    /** The leaf's slot; kNoLeaf if none. */
+    Slot find(const LeafId& id) const;
+    /** Adds a leaf that is not in the map. */
+    void insert(const LeafId& id, Slot slot);
+    /**
+     * The slot of the leaf, added as kNoLeaf if it is not in the map, for the caller to set: one probe where
+     * find and insert take two. Valid until the next change of the map.
+     */
+    Slot& findOrAdd(const LeafId& id);
+    /** Removes the leaf and returns its slot; kNoLeaf if there is none. */
+    Slot erase(const LeafId& id);
+    std::size_t size() const { return size_; }
+    void clear();
+    /** Room for n leaves without growing. */
+    void reserve(std::size_t n);
+    template <typename Visit>
+    void forEach(Visit&& visit) const {
+      for (const Entry& e : entries_)
+        if (e.slot != kNoLeaf) visit(e.id, e.slot);
+    }
+
+   private:
+    struct Entry {
+      LeafId id;
+      Slot slot = kNoLeaf;  // kNoLeaf: an empty entry
+    };
+    std::size_t home(const LeafId& id) const { return LeafIdHash()(id) & (entries_.size() - 1); }
+    void grow(std::size_t capacity);
+
+    std::vector<Entry> entries_;  // a power of two, at most half full
+    std::size_t size_ = 0;
+  };
+
+  /** The positions of `keys` sorted by cell (a radix sort), equal keys in their order. */
+  static std::vector<std::uint32_t> cellOrder(const std::vector<Key>& keys);
   /** Whether the cube holds an occupied cell or an empty old root. */
   bool cubeHasContent(const LeafId& cube) const;
   /** The first leaf on the path to tree key k, as PCL's descent finds it; `id` is its cube, or where PCL
@@ -237,6 +302,8 @@ class PCL_EXPORTS OctreeLeafTable {
   Slot leafOnPath(const Key& k, LeafId& id) const;
   /** A new leaf of this cube in a free slot. */
   Slot addLeaf(const LeafId& id);
+  /** A free slot for a new leaf. */
+  Slot takeSlot();
   void getKeyBitSize();
   std::shared_ptr<BranchIndex> buildBranchIndex() const;
   /** The walks' node array, built from the leaves at the first walk after a change. */
@@ -256,7 +323,7 @@ class PCL_EXPORTS OctreeLeafTable {
   bool bounding_box_defined_ = false;
   std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
   FastOctTree tree_;
-  std::unordered_map<LeafId, Slot, LeafIdHash> leaves_;  // only when holds_leaves_
+  LeafMap leaves_;  // only when holds_leaves_
   std::vector<Slot> free_slots_;
   Slot next_slot_ = 0;
   /** The leaf the last point went to (a scan's next point often shares it). */

@@ -5,6 +5,7 @@
 #include <deque>
 #include <memory>
 #include <type_traits>
+#include <typeinfo>
 #include <vector>
 
 #include <pcl/memory.h>
@@ -314,6 +315,14 @@ class OctreePointCloud {
  protected:
   /** Adds the input cloud's point point_idx_arg to its leaf; derived look-alikes add it their way. */
   virtual void addPointIdx(uindex_t point_idx_arg);
+  /**
+   * Whether addPointsFromInputCloud may sort the points into their leaves at once instead of calling
+   * addPointIdx for each: only for a class known to add points as this one does. A class derived from it,
+   * a user's included, gets addPointIdx called for every point unless it says otherwise.
+   */
+  virtual bool addsPointsInBulk() const { return typeid(*this) == typeid(OctreePointCloud); }
+  /** What adding a point of the input does to its leaf's container: pcl::octree's addPointIndex. */
+  virtual void addToLeaf(LeafContainerT& leaf, index_t point) { leaf.addPointIndex(point); }
   /** The leaf holding the voxel at this PCL key, creating it (as PCL's createLeaf) if there is none. */
   LeafNode* createLeaf(const octree::OctreeKey& key);
   /** The leaf holding the voxel at this PCL key; nullptr if none. */
@@ -380,6 +389,11 @@ class OctreePointCloud {
   LeafNode* slotNode(Slot slot, bool created);
   /** PCL's expandLeafNode: the leaf becomes a branch, its points go to new leaves one level down. */
   void expandLeaf(const LeafId& id, Slot slot);
+  /**
+   * Adds points[next..] (finite, of the input) to their leaves by sorting their keys, with the box grown
+   * for each in turn as addPointIdx would; the octree already has a leaf. Leaves `next` at the end.
+   */
+  void addInBulk(Indices& points, std::size_t& next);
 
   double epsilon_ = 0.0;
   OctreeLeafTable table_;

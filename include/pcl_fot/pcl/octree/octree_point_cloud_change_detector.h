@@ -49,6 +49,9 @@ class OctreePointCloudChangeDetector : public OctreePointCloud<PointT, LeafConta
     return static_cast<uindex_t>(indicesVector_arg.size());
   }
 
+ protected:
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudChangeDetector); }
+
  private:
   FastOctTree previous_;
 };

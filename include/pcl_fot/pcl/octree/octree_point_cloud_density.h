@@ -21,6 +21,9 @@ class OctreePointCloudDensity : public OctreePointCloud<PointT, LeafContainerT, 
     const LeafContainerT* leaf = this->findLeafAtPoint(point_arg);
     return leaf ? leaf->getPointCounter() : 0;
   }
+
+ protected:
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudDensity); }
 };
 
 }  // namespace fot

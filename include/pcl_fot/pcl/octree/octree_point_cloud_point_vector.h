@@ -15,6 +15,9 @@ class OctreePointCloudPointVector : public OctreePointCloud<PointT, LeafContaine
 
   OctreePointCloudPointVector(const double resolution_arg)
       : OctreePointCloud<PointT, LeafContainerT, BranchContainerT>(resolution_arg) {}
+
+ protected:
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudPointVector); }
 };
 
 }  // namespace fot

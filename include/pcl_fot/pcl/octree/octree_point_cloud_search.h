@@ -87,6 +87,8 @@ class OctreePointCloudSearch : public OctreePointCloud<PointT, LeafContainerT, B
  protected:
   /** As the octree's; the k-NN index of the last search gains the point in place. */
   void addPointIdx(uindex_t point_idx_arg) override;
+  /** The cloud's points go in as the octree's do: the k-NN index is built anew at the next search. */
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudSearch); }
 
  private:
   /** The index of the octree's points, rebuilt when the octree has changed since. */

@@ -15,6 +15,9 @@ class OctreePointCloudSinglePoint : public OctreePointCloud<PointT, LeafContaine
 
   OctreePointCloudSinglePoint(const double resolution_arg)
       : OctreePointCloud<PointT, LeafContainerT, BranchContainerT>(resolution_arg) {}
+
+ protected:
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudSinglePoint); }
 };
 
 }  // namespace fot

@@ -57,8 +57,11 @@ class OctreePointCloudVoxelCentroid : public OctreePointCloud<PointT, LeafContai
       return;
     }
     if (!this->adoptBoundingBoxToPoint(point.x, point.y, point.z)) return;
-    this->createLeaf(this->pclKey(point.x, point.y, point.z))->getContainer().addPoint(point);
+    addToLeaf(this->createLeaf(this->pclKey(point.x, point.y, point.z))->getContainer(),
+              static_cast<index_t>(point_idx_arg));
   }
+  void addToLeaf(LeafContainerT& leaf, index_t point) override { leaf.addPoint((*this->input_)[point]); }
+  bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudVoxelCentroid); }
 };
 
 }  // namespace fot

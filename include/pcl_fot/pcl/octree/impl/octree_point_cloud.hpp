@@ -112,7 +112,7 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointIdx(uin
       table_.markCell(k);  // a shallow leaf's cube keeps every point's cell
     }
   }
-  (*leaf)->addPointIndex(static_cast<index_t>(point_idx_arg));
+  addToLeaf(leaf->getContainer(), static_cast<index_t>(point_idx_arg));
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
@@ -140,19 +140,52 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointsFromIn
     PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] No input cloud.\n");
     return;
   }
+  Indices points;  // the finite points of the input, in its order
   if (indices_) {
+    points.reserve(indices_->size());
     for (const auto index : *indices_) {
       if (index < 0 || static_cast<std::size_t>(index) >= input_->size()) {
         PCL_ERROR("[pcl::fot::OctreePointCloud::addPointsFromInputCloud] Index %d is outside the cloud.\n",
                   index);
         continue;
       }
-      if (isFinite((*input_)[index])) addPointIdx(static_cast<uindex_t>(index));
+      if (isFinite((*input_)[index])) points.push_back(index);
     }
-    return;
+  } else {
+    points.reserve(input_->size());
+    for (std::size_t i = 0; i < input_->size(); ++i)
+      if (isFinite((*input_)[i])) points.push_back(static_cast<index_t>(i));
   }
-  for (std::size_t i = 0; i < input_->size(); ++i)
-    if (isFinite((*input_)[i])) addPointIdx(static_cast<uindex_t>(i));
+  std::size_t next = 0;
+  if constexpr (kHoldsLeaves) {
+    if (table_.maxObjsPerLeaf() == 0 && addsPointsInBulk()) {
+      // Until the first leaf exists, the box grows as it does for an empty octree (PCL keeps its old roots).
+      while (next < points.size() && getLeafCount() == 0) addPointIdx(static_cast<uindex_t>(points[next++]));
+      addInBulk(points, next);
+    }
+  }
+  for (; next < points.size(); ++next) addPointIdx(static_cast<uindex_t>(points[next]));
+}
+
+template <typename PointT, typename LeafContainerT, typename BranchContainerT>
+void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addInBulk(Indices& points,
+                                                                           std::size_t& next) {
+  std::vector<Key> keys;
+  keys.reserve(points.size() - next);
+  std::size_t kept = 0;
+  for (; next < points.size(); ++next) {
+    const PointT& p = (*input_)[points[next]];
+    if (!table_.adoptBoundingBoxToPoint(p.x, p.y, p.z)) continue;
+    keys.push_back(table_.pclKeyToTreeKey(table_.pclKey(p.x, p.y, p.z)));
+    points[kept++] = points[next];
+  }
+  table_.leavesOfKeys(keys, [&](Slot slot, bool created, const std::uint32_t* first,
+                                const std::uint32_t* last) {
+    LeafContainerT& leaf = slotNode(slot, created)->getContainer();
+    if constexpr (std::is_base_of_v<OctreeContainerPointIndices, LeafContainerT>)  // one allocation a leaf
+      leaf.getPointIndicesVector().reserve(leaf.getSize() + static_cast<std::size_t>(last - first));
+    for (; first != last; ++first) addToLeaf(leaf, points[*first]);
+  });
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
