@@ -75,38 +75,38 @@ std::size_t OctreeLeafTable::LeafIdHash::operator()(const LeafId& id) const {
   return std::size_t(h ^ (h >> 29));
 }
 
-OctreeLeafTable::Slot OctreeLeafTable::LeafMap::find(const LeafId& id) const {
-  if (size_ == 0) return kNoLeaf;
+template <typename Value>
+const Value* OctreeLeafTable::CubeMap<Value>::find(const LeafId& id) const {
+  if (size_ == 0) return nullptr;
   for (std::size_t i = home(id);; i = (i + 1) & (entries_.size() - 1)) {
     const Entry& e = entries_[i];
-    if (e.slot == kNoLeaf || e.id == id) return e.slot;
+    if (!e.used) return nullptr;
+    if (e.id == id) return &e.value;
   }
 }
 
-void OctreeLeafTable::LeafMap::insert(const LeafId& id, Slot slot) {
-  findOrAdd(id) = slot;
-}
-
-OctreeLeafTable::Slot& OctreeLeafTable::LeafMap::findOrAdd(const LeafId& id) {
+template <typename Value>
+Value& OctreeLeafTable::CubeMap<Value>::findOrAdd(const LeafId& id, bool& added) {
   if (2 * (size_ + 1) > entries_.size()) grow(std::max<std::size_t>(16, 2 * entries_.size()));
   std::size_t i = home(id);
-  while (entries_[i].slot != kNoLeaf && !(entries_[i].id == id)) i = (i + 1) & (entries_.size() - 1);
-  if (entries_[i].slot == kNoLeaf) {
-    entries_[i].id = id;
+  while (entries_[i].used && !(entries_[i].id == id)) i = (i + 1) & (entries_.size() - 1);
+  added = !entries_[i].used;
+  if (added) {
+    entries_[i] = Entry{id, Value{}, true};
     ++size_;
   }
-  return entries_[i].slot;
+  return entries_[i].value;
 }
 
-OctreeLeafTable::Slot OctreeLeafTable::LeafMap::erase(const LeafId& id) {
-  if (size_ == 0) return kNoLeaf;
+template <typename Value>
+bool OctreeLeafTable::CubeMap<Value>::erase(const LeafId& id) {
+  if (size_ == 0) return false;
   const std::size_t mask = entries_.size() - 1;
   std::size_t i = home(id);
-  while (entries_[i].slot != kNoLeaf && !(entries_[i].id == id)) i = (i + 1) & mask;
-  const Slot slot = entries_[i].slot;
-  if (slot == kNoLeaf) return kNoLeaf;
+  while (entries_[i].used && !(entries_[i].id == id)) i = (i + 1) & mask;
+  if (!entries_[i].used) return false;
   // Backward shift: an entry after the hole moves into it unless its home lies between the hole and it.
-  for (std::size_t j = (i + 1) & mask; entries_[j].slot != kNoLeaf; j = (j + 1) & mask) {
+  for (std::size_t j = (i + 1) & mask; entries_[j].used; j = (j + 1) & mask) {
     const std::size_t h = home(entries_[j].id);
     if (((j - h) & mask) >= ((j - i) & mask)) {
       entries_[i] = entries_[j];
@@ -115,27 +115,34 @@ OctreeLeafTable::Slot OctreeLeafTable::LeafMap::erase(const LeafId& id) {
   }
   entries_[i] = Entry{};
   --size_;
-  return slot;
+  return true;
 }
 
-void OctreeLeafTable::LeafMap::clear() {
+template <typename Value>
+void OctreeLeafTable::CubeMap<Value>::clear() {
   entries_.clear();
   size_ = 0;
 }
 
-void OctreeLeafTable::LeafMap::reserve(std::size_t n) {
+template <typename Value>
+void OctreeLeafTable::CubeMap<Value>::reserve(std::size_t n) {
   std::size_t capacity = 16;
   while (capacity < 2 * n) capacity *= 2;
   if (capacity > entries_.size()) grow(capacity);
 }
 
-void OctreeLeafTable::LeafMap::grow(std::size_t capacity) {
+template <typename Value>
+void OctreeLeafTable::CubeMap<Value>::grow(std::size_t capacity) {
   std::vector<Entry> old(capacity);
   old.swap(entries_);
   size_ = 0;
+  bool added;
   for (const Entry& e : old)
-    if (e.slot != kNoLeaf) insert(e.id, e.slot);
+    if (e.used) findOrAdd(e.id, added) = e.value;
 }
+
+template class OctreeLeafTable::CubeMap<OctreeLeafTable::Slot>;
+template class OctreeLeafTable::CubeMap<std::uint8_t>;
 
 OctreeLeafTable::OctreeLeafTable(double resolution, bool holds_leaves)
     : resolution_(resolution), holds_leaves_(holds_leaves), tree_(resolution) {
@@ -357,12 +364,12 @@ bool OctreeLeafTable::cubeHasContent(const LeafId& cube) const {
 OctreeLeafTable::Slot OctreeLeafTable::leafOnPath(const Key& k, LeafId& id) const {
   if (max_objs_per_leaf_ == 0) {
     id = LeafId{k, 0};
-    return leaves_.find(id);
+    return leafOf(id);
   }
   // PCL's descent: the root is a branch; below it, the first leaf, or the first node missing.
   for (std::uint32_t level = depth_ - 1;; --level) {
     id = cubeOf(k, level);
-    const Slot slot = leaves_.find(id);
+    const Slot slot = leafOf(id);
     if (slot != kNoLeaf) return slot;
     if (level == 0 || !cubeHasContent(id)) return kNoLeaf;
   }
@@ -377,7 +384,8 @@ OctreeLeafTable::Slot OctreeLeafTable::takeSlot() {
 
 OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
   const Slot slot = takeSlot();
-  leaves_.insert(id, slot);
+  bool added;
+  leaves_.findOrAdd(id, added) = slot;
   return slot;
 }
 
@@ -439,8 +447,9 @@ OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bo
     if (last_slot_ != kNoLeaf && last_id_ == id) {
       slot = last_slot_;
     } else {
-      Slot& entry = leaves_.findOrAdd(id);
-      if (entry == kNoLeaf) {
+      bool added;
+      Slot& entry = leaves_.findOrAdd(id, added);
+      if (added) {
         entry = takeSlot();
         created = new_node = true;
         tree_.setCell(k, CellState::Occupied);
@@ -473,14 +482,14 @@ OctreeLeafTable::Slot OctreeLeafTable::createLeaf(const octree::OctreeKey& key, 
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::leafOfCube(const LeafId& id, bool& created) {
-  const Slot slot = leaves_.find(id);
+  const Slot slot = leafOf(id);
   created = slot == kNoLeaf;
   return created ? addLeaf(id) : slot;
 }
 
 void OctreeLeafTable::eraseLeaf(const LeafId& id) {
-  const Slot slot = leaves_.erase(id);
-  if (slot == kNoLeaf) return;
+  const Slot slot = leafOf(id);
+  if (!leaves_.erase(id)) return;
   ++version_;
   free_slots_.push_back(slot);
   if (last_slot_ == slot) last_slot_ = kNoLeaf;
@@ -497,7 +506,7 @@ OctreeLeafTable::Slot OctreeLeafTable::leafAt(const octree::OctreeKey& key, uind
   const Key corner = pclKeyToTreeKey(firstVoxel(key, level));
   if (!holds_leaves_)  // the occupancy octree's leaves are its cells
     return level == 0 && tree_.getCell(corner) == CellState::Occupied ? 0 : kNoLeaf;
-  return leaves_.find(LeafId{corner, level});
+  return leafOf(LeafId{corner, level});
 }
 
 bool OctreeLeafTable::existLeaf(uindex_t x, uindex_t y, uindex_t z) const {
@@ -584,9 +593,10 @@ void OctreeLeafTable::addToBranches(BranchIndex& index, LeafId node) const {
   for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
     const LeafId parent = cubeOf(node.corner, level);
     const unsigned child = childIndex(node);
-    const auto [it, inserted] = index.try_emplace(parent, 0);
-    it->second |= std::uint8_t(1u << child);
-    if (!inserted) return;
+    bool added;
+    std::uint8_t& children = index.findOrAdd(parent, added);
+    children |= std::uint8_t(1u << child);
+    if (!added) return;
     node = parent;
   }
 }
@@ -596,11 +606,11 @@ void OctreeLeafTable::removeFromBranches(BranchIndex& index, LeafId node) const 
   for (std::uint32_t level = node.level + 1; level <= depth_; ++level) {
     const LeafId parent = cubeOf(node.corner, level);
     const unsigned child = childIndex(node);
-    const auto it = index.find(parent);
-    if (it == index.end()) return;
-    it->second &= std::uint8_t(~(1u << child));
-    if (it->second != 0 || level == depth_) return;
-    index.erase(it);
+    std::uint8_t* children = index.find(parent);
+    if (!children) return;
+    *children &= std::uint8_t(~(1u << child));
+    if (*children != 0 || level == depth_) return;
+    index.erase(parent);
     node = parent;
   }
 }
@@ -608,7 +618,8 @@ void OctreeLeafTable::removeFromBranches(BranchIndex& index, LeafId node) const 
 std::shared_ptr<OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex() const {
   auto index = std::make_shared<BranchIndex>();
   const LeafId root = cubeOf(pclKeyToTreeKey(octree::OctreeKey(0, 0, 0)), depth_);
-  index->emplace(root, 0);
+  bool added;
+  index->findOrAdd(root, added);
   if (holds_leaves_)
     leaves_.forEach([&](const LeafId& id, Slot) { addToBranches(*index, id); });
   else
@@ -616,7 +627,7 @@ std::shared_ptr<OctreeLeafTable::BranchIndex> OctreeLeafTable::buildBranchIndex(
   // PCL keeps the empty old roots of a box grown before any point as branches.
   for (const Phantom& ph : phantoms_) {
     const LeafId cube{ph.min, std::uint32_t(ph.level)};
-    index->try_emplace(cube, 0);
+    index->findOrAdd(cube, added);
     addToBranches(*index, cube);
   }
   return index;
@@ -654,7 +665,7 @@ std::shared_ptr<OctreeLeafTable::NodeArray> OctreeLeafTable::buildNodeArray() co
 OctreeLeafTable::Slot OctreeLeafTable::approxLeaf(const Eigen::Vector3f& point) const {
   const auto branches = branchIndex();
   octree::OctreeKey key(0, 0, 0);
-  std::uint8_t children = branches->at(cubeOf(pclKeyToTreeKey(key), depth_));
+  std::uint8_t children = *branches->find(cubeOf(pclKeyToTreeKey(key), depth_));  // the root is always there
   for (uindex_t depth = 1; depth <= depth_; ++depth) {
     double nearest = std::numeric_limits<double>::max();
     octree::OctreeKey nearest_key;
@@ -671,10 +682,11 @@ OctreeLeafTable::Slot OctreeLeafTable::approxLeaf(const Eigen::Vector3f& point) 
     }
     if (nearest == std::numeric_limits<double>::max()) return kNoLeaf;  // an empty old root: PCL asserts
     const std::uint32_t level = depth_ - depth;
-    const auto it = branches->find(LeafId{pclKeyToTreeKey(firstVoxel(nearest_key, level)), level});
-    if (it == branches->end()) return leafAt(nearest_key, depth);
+    const std::uint8_t* branch =
+        branches->find(LeafId{pclKeyToTreeKey(firstVoxel(nearest_key, level)), level});
+    if (!branch) return leafAt(nearest_key, depth);
     key = nearest_key;
-    children = it->second;
+    children = *branch;
   }
   return kNoLeaf;
 }

@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -45,8 +44,47 @@ class PCL_EXPORTS OctreeLeafTable {
   struct LeafIdHash {
     std::size_t operator()(const LeafId& id) const;
   };
+  /**
+   * Cubes to values, open addressing with linear probing: a look-up reads a cache line or two and an entry
+   * costs no allocation (a node-based map's look-ups and allocations were a third of a build).
+   */
+  template <typename Value>
+  class CubeMap {
+   public:
+    /** The value of the cube; nullptr if it has none. */
+    const Value* find(const LeafId& id) const;
+    Value* find(const LeafId& id) { return const_cast<Value*>(std::as_const(*this).find(id)); }
+    /**
+     * The value of the cube, added value-initialised if it has none (`added` says which): one probe where
+     * find and insert take two. Valid until the next change of the map.
+     */
+    Value& findOrAdd(const LeafId& id, bool& added);
+    /** Removes the cube; false if it has no value. */
+    bool erase(const LeafId& id);
+    std::size_t size() const { return size_; }
+    void clear();
+    /** Room for n cubes without growing. */
+    void reserve(std::size_t n);
+    template <typename Visit>
+    void forEach(Visit&& visit) const {
+      for (const Entry& e : entries_)
+        if (e.used) visit(e.id, e.value);
+    }
+
+   private:
+    struct Entry {
+      LeafId id{};
+      Value value{};
+      bool used = false;
+    };
+    std::size_t home(const LeafId& id) const { return LeafIdHash()(id) & (entries_.size() - 1); }
+    void grow(std::size_t capacity);
+
+    std::vector<Entry> entries_;  // a power of two, at most half full
+    std::size_t size_ = 0;
+  };
   /** PCL's branches: each one's cube, with the bit pattern of its children (bit i: child i exists). */
-  using BranchIndex = std::unordered_map<LeafId, std::uint8_t, LeafIdHash>;
+  using BranchIndex = CubeMap<std::uint8_t>;
 
   /** One node of the octree pcl::octree would build. */
   struct Node {
@@ -254,45 +292,6 @@ class PCL_EXPORTS OctreeLeafTable {
                    const std::function<void(const octree::OctreeKey&)>& visit) const;
 
  private:
-  /**
-   * The leaves by cube, open addressing with linear probing: a look-up reads one or two cache lines and a
-   * leaf costs no allocation (a node-based map's look-ups and allocations were a third of a build).
-   */
-  class LeafMap {
-   public:
-    /** The leaf's slot; kNoLeaf if none. */
-    Slot find(const LeafId& id) const;
-    /** Adds a leaf that is not in the map. */
-    void insert(const LeafId& id, Slot slot);
-    /**
-     * The slot of the leaf, added as kNoLeaf if it is not in the map, for the caller to set: one probe where
-     * find and insert take two. Valid until the next change of the map.
-     */
-    Slot& findOrAdd(const LeafId& id);
-    /** Removes the leaf and returns its slot; kNoLeaf if there is none. */
-    Slot erase(const LeafId& id);
-    std::size_t size() const { return size_; }
-    void clear();
-    /** Room for n leaves without growing. */
-    void reserve(std::size_t n);
-    template <typename Visit>
-    void forEach(Visit&& visit) const {
-      for (const Entry& e : entries_)
-        if (e.slot != kNoLeaf) visit(e.id, e.slot);
-    }
-
-   private:
-    struct Entry {
-      LeafId id;
-      Slot slot = kNoLeaf;  // kNoLeaf: an empty entry
-    };
-    std::size_t home(const LeafId& id) const { return LeafIdHash()(id) & (entries_.size() - 1); }
-    void grow(std::size_t capacity);
-
-    std::vector<Entry> entries_;  // a power of two, at most half full
-    std::size_t size_ = 0;
-  };
-
   /** The positions of `keys` sorted by cell (a radix sort), equal keys in their order. */
   static std::vector<std::uint32_t> cellOrder(const std::vector<Key>& keys);
   /** Whether the cube holds an occupied cell or an empty old root. */
@@ -304,6 +303,11 @@ class PCL_EXPORTS OctreeLeafTable {
   Slot addLeaf(const LeafId& id);
   /** A free slot for a new leaf. */
   Slot takeSlot();
+  /** The slot of the leaf of this cube; kNoLeaf if none. */
+  Slot leafOf(const LeafId& id) const {
+    const Slot* slot = leaves_.find(id);
+    return slot ? *slot : kNoLeaf;
+  }
   void getKeyBitSize();
   std::shared_ptr<BranchIndex> buildBranchIndex() const;
   /** The walks' node array, built from the leaves at the first walk after a change. */
@@ -323,7 +327,7 @@ class PCL_EXPORTS OctreeLeafTable {
   bool bounding_box_defined_ = false;
   std::array<std::int32_t, 3> offset_{};  // tree key = PCL key + offset
   FastOctTree tree_;
-  LeafMap leaves_;  // only when holds_leaves_
+  CubeMap<Slot> leaves_;  // only when holds_leaves_
   std::vector<Slot> free_slots_;
   Slot next_slot_ = 0;
   /** The leaf the last point went to (a scan's next point often shares it). */
