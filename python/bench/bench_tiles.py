@@ -94,29 +94,28 @@ def run(args):
     spec = tiles.MapSpec(0.02, rule="log_odds")
     lines += ["Tiled mapping: the three Kinect frames %d times over (%d scans, 2 cm cells, log-odds), one process "
               "(`insert_scan` scan by scan, one thread) against `pcl_fot.tiles.map_tiles` on a LocalCluster (its "
-              "start not counted), median of %d runs: the time to the tile set (tracing, the tiles' files and the "
-              "index), and apart, the time to stitch the tiles into one map in one process (`open_tile_set`). "
+              "start not counted), in turn in each of %d rounds, medians: the time to the tile set (tracing, the "
+              "tiles' files and the index), and apart, the time to stitch the tiles into one map in one process "
+              "(`open_tile_set`). "
               "Every stitched map was checked equal to the one-process map, cell for cell." % (
                   args.rounds, len(paths), args.repeats), "",
               "| tile level (edge) | tiles | one process | 1 worker | 2 workers | 1 worker / one process | "
               "1 worker / 2 workers | stitch | peak RSS per worker |",
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    single = []
-    for _ in range(args.repeats):
-        seconds, whole = one_process(spec, paths)
-        single.append(seconds)
-    one = statistics.median(single)
     for level in args.levels:
-        times, stitches = {}, []
-        for workers in (1, 2):
-            runs = []
-            for _ in range(args.repeats):
+        # Side by side: each round maps the scans in one process, then tiled on 1 and on 2 workers.
+        single, times, stitches = [], {1: [], 2: []}, []
+        for _ in range(args.repeats):
+            seconds, whole = one_process(spec, paths)
+            single.append(seconds)
+            for workers in (1, 2):
                 seconds, records, stitch, tree = tiled(spec, paths, level, workers)
                 if not same(tree, whole):
                     raise SystemExit("the tiled map differs from the one-process map at level %d" % level)
-                runs.append(seconds)
+                times[workers].append(seconds)
                 stitches.append(stitch)
-            times[workers] = statistics.median(runs)
+        one = statistics.median(single)
+        times = {w: statistics.median(t) for w, t in times.items()}
         rss = max(r["peak_rss_bytes"] for r in records)
         lines.append("| %d (%.2f m) | %d | %.2f s | %.2f s | %.2f s | %.2f× | %.2f× | %.2f s | %s |"
                      % (level, 0.02 * (1 << level), len(records), one, times[1], times[2], times[1] / one,
@@ -170,7 +169,7 @@ def main():
     parser.add_argument("-levels", type=int, nargs="+", default=[7, 9])
     parser.add_argument("-street", type=int, default=6)
     parser.add_argument("-fine", type=float, default=0.005)
-    parser.add_argument("-fine_level", type=int, default=9)
+    parser.add_argument("-fine_level", type=int, default=7)
     parser.add_argument("-limit_mb", type=float, default=300)
     args = parser.parse_args()
     section = run(args)

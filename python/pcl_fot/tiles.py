@@ -5,8 +5,9 @@ A tile is one node of the tree at a chosen level L (2 to 15): the cube of 2**L c
 (Up to level 15 the tree's nodes lie on these boundaries: see tree/tree_coord.h.)
 
 A run has two stages. First one task per scan walks the scan's rays, exactly as the whole-map insertion
-walks them (FastOctTree.trace_scan), and files the cells it updates by tile. Then one task per tile writes,
-scan by scan in time order, that scan's cells of the tile into the tile's map (apply_scan).
+walks them (FastOctTree.trace_scan), writes the cells it updates sorted by tile into one file, and returns
+where each tile's run lies in it. Then one task per tile reads, scan by scan in time order, only its runs
+and writes them into the tile's map (apply_scan).
 
 A run writes its tiles into a folder of its own, tiles/<run>/, and only when every task has succeeded does it
 replace tiles.json, atomically, and then remove the folders of earlier runs. So a run that fails, or a process
@@ -113,19 +114,20 @@ def load_scan(path, pose=None):
     return cloud["points"], origin, orientation
 
 
-def _scan_files(work_dir, i):
-    stem = os.path.join(work_dir, "scan%06d" % i)
-    return stem + ".blocks.npy", stem + ".tiles.npy", stem + ".starts.npy"
+def _scan_file(work_dir, i):
+    return os.path.join(work_dir, "scan%06d.blocks" % i)
 
 
-def _save_npy(path, array):
-    tmp = "%s.tmp.%d.npy" % (path, os.getpid())
-    np.save(tmp, array)
+def _save_raw(path, array):
+    """The array's bytes alone: a tile task reads its runs at their offsets, with no header to parse."""
+    tmp = "%s.tmp.%d" % (path, os.getpid())
+    array.tofile(tmp)
     os.replace(tmp, path)
 
 
 def trace_task(spec, level, i, path, pose, work_dir):
-    """Stage one: scan i's cells, sorted by tile, in three files; returns the tiles they touch."""
+    """Stage one: scan i's cells, sorted by tile, in one file; returns their dtype and {tile: (start, end)},
+    each tile's run."""
     try:
         points, origin, orientation = load_scan(path, pose)
         blocks, _ = spec.new_map().trace_scan(points, origin, orientation, max_range=spec.max_range,
@@ -133,13 +135,11 @@ def trace_task(spec, level, i, path, pose, work_dir):
         tiles = FastOctTree.block_keys(blocks) >> level
         order = np.lexsort((tiles[:, 2], tiles[:, 1], tiles[:, 0]))  # stable: each tile keeps the scan's order
         unique, starts = np.unique(tiles[order], axis=0, return_index=True)
-        names = _scan_files(work_dir, i)
-        _save_npy(names[0], blocks[order])
-        _save_npy(names[1], unique.astype(np.int32))
-        _save_npy(names[2], np.append(starts, len(order)).astype(np.int64))
+        _save_raw(_scan_file(work_dir, i), blocks[order])
     except Exception as e:
         raise TileSetError("scan %d (%s): %s" % (i + 1, path, e)) from e
-    return [tuple(int(v) for v in t) for t in unique]
+    ends = np.append(starts[1:], len(order))
+    return blocks.dtype, {tuple(int(v) for v in t): (int(a), int(b)) for t, a, b in zip(unique, starts, ends)}
 
 
 def peak_rss_bytes():
@@ -155,20 +155,17 @@ def peak_rss_bytes():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
-def map_tile(spec, level, index, scan_count, work_dir, out_dir, run):
-    """Stage two: every scan's cells of the tile, in time order, into the tile's map, written as
-    tiles/<run>/<name>.fot. Returns the tile's record for the index, or None when no cell was written."""
+def map_tile(spec, level, index, runs, dtype, work_dir, out_dir, run):
+    """Stage two: the tile's runs of blocks of `dtype`, (scan, start, end) in time order, into the tile's map,
+    written as tiles/<run>/<name>.fot. Returns the tile's record for the index, or None when no cell was
+    written."""
     start = time.perf_counter()
     name = tile_name(level, index)
     try:
         tree = spec.new_map()
-        for i in range(scan_count):
-            blocks_file, tiles_file, starts_file = _scan_files(work_dir, i)
-            at = np.flatnonzero((np.load(tiles_file) == np.asarray(index)).all(axis=1))
-            if len(at):
-                starts = np.load(starts_file)
-                blocks = np.load(blocks_file, mmap_mode="r")[starts[at[0]]:starts[at[0] + 1]]
-                tree.apply_scan(np.ascontiguousarray(blocks))
+        for i, first, last in runs:
+            tree.apply_scan(np.fromfile(_scan_file(work_dir, i), dtype=dtype, count=last - first,
+                                        offset=first * dtype.itemsize))
         if tree.empty:
             return None
         file = os.path.join("tiles", run, name + ".fot")
@@ -295,8 +292,13 @@ def map_tiles(scan_paths, out_dir, spec, level, poses=None, scheduler=None, work
         touched = _run(client, trace_task,
                        [(spec, level, i, p, poses[i] if poses else None, work_dir) for i, p in enumerate(scan_paths)],
                        ["trace-scan-%d-%s" % (i, run) for i in range(n)], progress, "scans traced")
-        tiles = sorted(set(t for scan in touched for t in scan))
-        records = _run(client, map_tile, [(spec, level, t, n, work_dir, out_dir, run) for t in tiles],
+        runs = {}  # tile: its runs in time order
+        for i, (_, scan) in enumerate(touched):
+            for t, (start, end) in scan.items():
+                runs.setdefault(t, []).append((i, start, end))
+        tiles = sorted(runs)
+        dtype = touched[0][0] if touched else None
+        records = _run(client, map_tile, [(spec, level, t, runs[t], dtype, work_dir, out_dir, run) for t in tiles],
                        ["tile-%s-%s" % (tile_name(level, t), run) for t in tiles], progress, "tiles mapped")
         records = [r for r in records if r is not None]
         write_index(out_dir, spec, level, records)
