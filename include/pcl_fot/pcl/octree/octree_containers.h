@@ -3,6 +3,7 @@
 #include <list>
 
 #include <pcl/octree/octree_container.h>
+#include <pcl/octree/octree_key.h>
 #include <pcl/octree/octree_nodes.h>
 #include <pcl/point_types.h>  // registers each type with its point operators (pcl::common)
 #include <pcl/types.h>
@@ -11,8 +12,8 @@ namespace pcl {
 namespace fot {
 
 /**
- * The leaves and nodes of the pcl::octree look-alikes are pcl::octree's own types, so code that names them,
- * or brings its own container with their interface, compiles unchanged.
+ * The leaves, nodes and keys of the pcl::octree look-alikes are pcl::octree's own types, so code that names
+ * them, or brings its own container with their interface, compiles unchanged.
  */
 using octree::BRANCH_NODE;
 using octree::LEAF_NODE;
@@ -21,6 +22,7 @@ using octree::OctreeContainerBase;
 using octree::OctreeContainerEmpty;
 using octree::OctreeContainerPointIndex;
 using octree::OctreeContainerPointIndices;
+using octree::OctreeKey;
 using octree::OctreeNode;
 
 /** Counts the points of a voxel, as pcl::octree::OctreePointCloudDensityContainer. */
