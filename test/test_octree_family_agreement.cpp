@@ -222,12 +222,23 @@ TEST_P(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
     ref.addPointsFromInputCloud();
     ours.addPointsFromInputCloud();
     ASSERT_EQ(ref.size(), ours.size());
+    // The same leaves in order, each linked to the same neighbours in the same order (as leaf numbers).
+    std::map<const void*, std::size_t> ref_number, our_number;
     auto r = ref.leaf_depth_begin();
     auto o = ours.leaf_depth_begin();
     for (; r != ref.leaf_depth_end(); ++r, ++o) {
       ASSERT_EQ(r.getCurrentOctreeKey(), o.getCurrentOctreeKey());
-      ASSERT_EQ(r.getLeafContainer().size(), o.getLeafContainer().size());
       ASSERT_EQ(r.getLeafContainer().getPointCounter(), o.getLeafContainer().getPointCounter());
+      ref_number.emplace(&r.getLeafContainer(), ref_number.size());
+      our_number.emplace(&o.getLeafContainer(), our_number.size());
+    }
+    for (r = ref.leaf_depth_begin(), o = ours.leaf_depth_begin(); r != ref.leaf_depth_end(); ++r, ++o) {
+      std::vector<std::size_t> ref_links, our_links;
+      for (auto n = r.getLeafContainer().cbegin(); n != r.getLeafContainer().cend(); ++n)
+        ref_links.push_back(ref_number.at(*n));
+      for (auto n = o.getLeafContainer().cbegin(); n != o.getLeafContainer().cend(); ++n)
+        our_links.push_back(our_number.at(*n));
+      ASSERT_EQ(ref_links, our_links);
     }
     // PCL's occlusion walk reads keys outside the box as if they were inside: compare with the camera inside.
     const PointXYZ camera(0, 0, 0);

@@ -1,5 +1,5 @@
-// The pcl::octree look-alikes against pcl::octree: each search, a leaf walk, the centroids and the change
-// detector, build plus queries.
+// The pcl::octree look-alikes against pcl::octree: each search, a leaf walk, the centroids, the density and
+// adjacency octrees and the change detector, build plus queries.
 #include "sections.h"
 
 #include <cstdio>
@@ -8,11 +8,15 @@
 #include <type_traits>
 
 #include <pcl/common/point_tests.h>
+#include <pcl/octree/octree_pointcloud_adjacency.h>
 #include <pcl/octree/octree_pointcloud_changedetector.h>
+#include <pcl/octree/octree_pointcloud_density.h>
 #include <pcl/octree/octree_pointcloud_voxelcentroid.h>
 #include <pcl/octree/octree_search.h>
 
+#include <pcl_fot/pcl/octree/octree_point_cloud_adjacency.h>
 #include <pcl_fot/pcl/octree/octree_point_cloud_change_detector.h>
+#include <pcl_fot/pcl/octree/octree_point_cloud_density.h>
 #include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
 #include <pcl_fot/pcl/octree/octree_point_cloud_voxel_centroid.h>
 
@@ -282,6 +286,27 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
          return ours ? buildAndQuery<pcl::fot::OctreePointCloudVoxelCentroid>(cloud, res, centroids)
                      : buildAndQuery<pcl::octree::OctreePointCloudVoxelCentroid>(cloud, res, centroids);
        }},
+      {"getVoxelDensityAtPoint (density octree)", near.size(),
+       [&](bool ours) {
+         const auto density = [&](auto& octree) {
+           double s = 0;
+           for (const auto& q : near) s += double(octree.getVoxelDensityAtPoint(q));
+           return s;
+         };
+         return ours ? buildAndQuery<pcl::fot::OctreePointCloudDensity>(cloud, res, density)
+                     : buildAndQuery<pcl::octree::OctreePointCloudDensity>(cloud, res, density);
+       }},
+      {"adjacency octree: each voxel's neighbours and points", 1,
+       [&](bool ours) {
+         const auto neighbours = [&](auto& octree) {
+           double s = 0, i = 0;
+           for (auto it = octree.begin(); it != octree.end(); ++it, ++i)
+             s += double((*it)->size()) * (1.0 + i * 1e-9) + double((*it)->getPointCounter()) * 1e-3;
+           return s;
+         };
+         return ours ? buildAndQuery<pcl::fot::OctreePointCloudAdjacency>(cloud, res, neighbours)
+                     : buildAndQuery<pcl::octree::OctreePointCloudAdjacency>(cloud, res, neighbours);
+       }},
       {"change detector: both buffers + new voxels", 1,
        [&](bool ours) {
          const auto detect = [&](auto& octree) {
@@ -342,7 +367,8 @@ std::string scanTable(const BenchScan& target, const BenchScan& source, int repe
 std::string benchOctreeFamily(const std::vector<BenchScan>& scans, int repeats) {
   std::string out =
       "## The pcl::octree look-alikes\n\n"
-      "`pcl::fot::OctreePointCloudSearch` and `OctreePointCloudChangeDetector` against pcl::octree's, "
+      "`pcl::fot::OctreePointCloudSearch`, the voxel centroid, density and adjacency octrees and "
+      "`OctreePointCloudChangeDetector` against pcl::octree's, "
       "side by side in one run: each row times building the octree from the target scan and then its "
       "queries (points of the other scan, jittered by up to a cell), median of the rounds. \"Same answers\" "
       "compares a checksum of every answer: sizes, indices in order, distances (for k-NN the distances "

@@ -13,6 +13,7 @@
 #include <pcl/console/print.h>
 
 #include <pcl_fot/pcl/octree/octree_point_cloud.h>
+#include <pcl_fot/pcl/octree/voxel_neighbors.h>
 
 namespace pcl {
 namespace fot {
@@ -72,12 +73,18 @@ class OctreePointCloudAdjacency : public OctreePointCloud<PointT, LeafContainerT
     OctreePointCloudT::addPointsFromInputCloud();
     leaf_vector_.clear();
     leaf_vector_.reserve(this->getLeafCount());
+    std::vector<octree::OctreeKey> keys;
+    keys.reserve(this->getLeafCount());
     for (auto it = this->leaf_depth_begin(); it != this->leaf_depth_end(); ++it) {
       LeafContainerT* leaf = &it.getLeafContainer();
       leaf->computeData();
-      computeNeighbors(it.getCurrentOctreeKey(), leaf);
+      keys.push_back(it.getCurrentOctreeKey());
       leaf_vector_.push_back(leaf);
     }
+    const VoxelNeighbors neighbors(keys);
+    for (std::size_t i = 0; i < leaf_vector_.size(); ++i)
+      for (const std::uint32_t* n = neighbors.begin(i); n != neighbors.end(i); ++n)
+        leaf_vector_[i]->addNeighbor(leaf_vector_[*n]);
   }
 
   /** The container of the (transformed) point's voxel; nullptr if it has none. */
@@ -157,7 +164,10 @@ class OctreePointCloudAdjacency : public OctreePointCloud<PointT, LeafContainerT
     this->createLeaf(this->pclKey(p.x, p.y, p.z))->getContainer().addPoint(point);
   }
 
-  /** Links the leaf to every leaf among the 27 voxels around its key, itself included, in PCL's order. */
+  /**
+   * Links the leaf to every leaf among the 27 voxels around its key, itself included, in PCL's order: PCL's
+   * protected call for one leaf. The build links all leaves at once (VoxelNeighbors).
+   */
   void computeNeighbors(const octree::OctreeKey& key, LeafContainerT* leaf) {
     const uindex_t last = static_cast<uindex_t>((std::uint64_t(1) << this->getTreeDepth()) - 1);
     for (int dx = key.x > 0 ? -1 : 0; dx <= (key.x == last ? 0 : 1); ++dx)
