@@ -39,6 +39,31 @@ bool mortonLess(const WalkItem& a, const WalkItem& b) {
   return top != 0 ? a.key[axis] < b.key[axis] : a.level > b.level;
 }
 
+/**
+ * The positions of `value` in ascending order, equal values in their order: a radix sort, least
+ * significant digit first, of values below 2^bits.
+ */
+std::vector<std::uint32_t> radixOrder(std::vector<std::uint64_t> value, unsigned bits) {
+  const std::size_t n = value.size();
+  std::vector<std::uint32_t> order(n), scratch(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+  std::vector<std::uint64_t> value_scratch(n);
+  constexpr unsigned kDigit = 11;  // 11 bits a pass; each pass is stable
+  for (unsigned shift = 0; shift < bits; shift += kDigit) {
+    std::vector<std::uint32_t> start((1u << kDigit) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[(value[i] >> shift & ((1u << kDigit) - 1)) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t at = start[value[i] >> shift & ((1u << kDigit) - 1)]++;
+      value_scratch[at] = value[i];
+      scratch[at] = order[i];
+    }
+    value.swap(value_scratch);
+    order.swap(scratch);
+  }
+  return order;
+}
+
 /** PCL's index of the child holding the item's cube, in its node `level` + 1 levels above the voxels. */
 unsigned childOf(const WalkItem& item, std::uint32_t level) {
   return (item.key[0] >> level & 1u) << 2 | (item.key[1] >> level & 1u) << 1 | (item.key[2] >> level & 1u);
@@ -391,9 +416,7 @@ OctreeLeafTable::Slot OctreeLeafTable::addLeaf(const LeafId& id) {
 
 std::vector<std::uint32_t> OctreeLeafTable::cellOrder(const std::vector<Key>& keys) {
   const std::size_t n = keys.size();
-  std::vector<std::uint32_t> order(n), scratch(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
-  if (n < 2) return order;
+  if (n < 2) return std::vector<std::uint32_t>(n, 0);
   // Each key as one number: its offsets from the lowest key on each axis, side by side.
   std::int64_t lo[3] = {keys[0].x, keys[0].y, keys[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
   for (const Key& k : keys) {
@@ -408,28 +431,16 @@ std::vector<std::uint32_t> OctreeLeafTable::cellOrder(const std::vector<Key>& ke
            std::uint64_t(k.z - lo[2]);
   };
   if (3 * bits > 64) {  // the box spans more than 2^21 cells: a comparison sort
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return std::tie(keys[a].x, keys[a].y, keys[a].z) < std::tie(keys[b].x, keys[b].y, keys[b].z);
     });
     return order;
   }
-  std::vector<std::uint64_t> value(n), value_scratch(n);
+  std::vector<std::uint64_t> value(n);
   for (std::size_t i = 0; i < n; ++i) value[i] = packed(keys[i]);
-  // Least significant digit first, 11 bits a pass; each pass is stable, so equal keys keep their order.
-  constexpr unsigned kDigit = 11;
-  for (unsigned shift = 0; shift < 3 * bits; shift += kDigit) {
-    std::vector<std::uint32_t> start((1u << kDigit) + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start[(value[i] >> shift & ((1u << kDigit) - 1)) + 1];
-    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t at = start[value[i] >> shift & ((1u << kDigit) - 1)]++;
-      value_scratch[at] = value[i];
-      scratch[at] = order[i];
-    }
-    value.swap(value_scratch);
-    order.swap(scratch);
-  }
-  return order;
+  return radixOrder(std::move(value), 3 * bits);
 }
 
 OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bool& created) {
@@ -654,9 +665,25 @@ std::shared_ptr<OctreeLeafTable::NodeArray> OctreeLeafTable::buildNodeArray() co
   }
   // PCL keeps the empty old roots of a box grown before any point as branches.
   for (const Phantom& ph : phantoms_) add(ph.min, std::uint32_t(ph.level), kNoLeaf);
-  // A lambda, not the function's address: the sort inlines it.
-  std::sort(items.begin(), items.end(),
-            [](const WalkItem& a, const WalkItem& b) { return mortonLess(a, b); });
+  std::uint32_t any = 0;  // the keys' bits
+  for (const WalkItem& w : items) any |= w.key[0] | w.key[1] | w.key[2];
+  unsigned bits = 0;
+  while (any >> bits != 0) ++bits;
+  if (3 * bits + 5 <= 64) {
+    // Morton codes in PCL's child order with the level below them (bigger cubes first): one radix sort.
+    std::vector<std::uint64_t> code(items.size());
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const WalkItem& w = items[i];
+      code[i] = detail::morton3(w.key[2], w.key[1], w.key[0]) << 5 | (31u - w.level);
+    }
+    const std::vector<std::uint32_t> order = radixOrder(std::move(code), 3 * bits + 5);
+    std::vector<WalkItem> sorted(items.size());
+    for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = items[order[i]];
+    items.swap(sorted);
+  } else {  // keys of more than 19 bits: a comparison sort (a lambda, not the function's address: it inlines)
+    std::sort(items.begin(), items.end(),
+              [](const WalkItem& a, const WalkItem& b) { return mortonLess(a, b); });
+  }
   auto nodes = std::make_shared<NodeArray>(1);
   fillNode(*nodes, 0, items, 0, items.size(), depth_);
   return nodes;
