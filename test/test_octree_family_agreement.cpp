@@ -228,6 +228,7 @@ TEST_P(OctreeFamilyAgreement, AdjacencyLinksTheSameNeighbours) {
     auto o = ours.leaf_depth_begin();
     for (; r != ref.leaf_depth_end(); ++r, ++o) {
       ASSERT_EQ(r.getCurrentOctreeKey(), o.getCurrentOctreeKey());
+      ASSERT_EQ(r.getLeafContainer().size(), o.getLeafContainer().size());
       ASSERT_EQ(r.getLeafContainer().getPointCounter(), o.getLeafContainer().getPointCounter());
       ref_number.emplace(&r.getLeafContainer(), ref_number.size());
       our_number.emplace(&o.getLeafContainer(), our_number.size());
