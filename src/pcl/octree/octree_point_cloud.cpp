@@ -1,4 +1,5 @@
 // OctreePointCloud with point indices in its leaves, and the occupancy octree, for each point type.
+#include <pcl_fot/pcl/octree/octree_point_cloud.h>
 #include <pcl_fot/pcl/octree/impl/octree_point_cloud.hpp>
 
 #ifndef PCL_NO_PRECOMPILE

@@ -1,4 +1,5 @@
 // OctreePointCloudDensity for each point type.
+#include <pcl_fot/pcl/octree/octree_point_cloud_density.h>
 #include <pcl_fot/pcl/octree/impl/octree_point_cloud.hpp>
 
 #ifndef PCL_NO_PRECOMPILE

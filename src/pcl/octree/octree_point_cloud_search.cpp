@@ -1,4 +1,5 @@
 // OctreePointCloudSearch for each point type.
+#include <pcl_fot/pcl/octree/octree_point_cloud_search.h>
 #include <pcl_fot/pcl/octree/impl/octree_point_cloud_search.hpp>
 
 #ifndef PCL_NO_PRECOMPILE

@@ -1,4 +1,5 @@
 // OctreePointCloudVoxelCentroid for each point type.
+#include <pcl_fot/pcl/octree/octree_point_cloud_voxel_centroid.h>
 #include <pcl_fot/pcl/octree/impl/octree_point_cloud.hpp>
 
 #ifndef PCL_NO_PRECOMPILE

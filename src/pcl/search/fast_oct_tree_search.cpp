@@ -1,4 +1,5 @@
 // FastOctTreeSearch for each point type.
+#include <pcl_fot/pcl/search/fast_oct_tree_search.h>
 #include <pcl_fot/pcl/search/impl/fast_oct_tree_search.hpp>
 
 #ifndef PCL_NO_PRECOMPILE
