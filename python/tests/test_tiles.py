@@ -240,10 +240,10 @@ def test_a_failed_run_names_the_tile_and_keeps_the_earlier_tile_set(room_scans, 
 
 @pytest.mark.skipif(real_scan_dir() is None, reason="PCL's real scans not found (PCL_FOT_DATA_DIR)")
 @pytest.mark.parametrize("level", [5, 7])
-def test_tiles_equal_the_single_process_map_on_real_scans(tmp_path, level):
+def test_tiles_equal_the_single_process_map_on_real_scans(tmp_path, cluster, level):
     paths = [os.path.join(real_scan_dir(), "kinect_capture000%d.pcd" % i) for i in (1, 2, 3)]
     spec = tiles.MapSpec(0.02, rule="log_odds")
-    tiles.map_tiles(paths, str(tmp_path), spec, level, workers=2)
+    tiles.map_tiles(paths, str(tmp_path), spec, level, scheduler=cluster)
     whole = single_process_map(spec, paths)
     assert whole.occupied_count > 10000
     assert not (tmp_path / "map.fot").exists() and same_cells(tiles.open_tile_set(str(tmp_path)), whole)
