@@ -364,4 +364,9 @@ def _main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(_main())
+    # Run as `python3 -m pcl_fot.tiles`, this file is __main__, whose functions Dask would pickle by value
+    # (with the extension module's objects they reach, which cannot be pickled). The package's own copy
+    # is pickled by name, and the workers import it.
+    from pcl_fot import tiles as _tiles
+
+    sys.exit(_tiles._main())

@@ -5,6 +5,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -104,7 +105,9 @@ def test_command_line_maps_and_summarises(room_scans, tmp_path, capsys):
     out = str(tmp_path / "cli")
     args = ["map", "--workers", "2", "--tile-level", "6", "-res", "0.05", "--stitch", "-out", out]
     args += [s[0] for s in room_scans]
-    assert tiles._main(args) == 0
+    # As a user runs it: the module as __main__, its tasks sent to worker processes.
+    run = subprocess.run([sys.executable, "-m", "pcl_fot.tiles"] + args, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
     spec = tiles.MapSpec(0.05)
     assert same_cells(pcl_fot.FastOctTree.load(os.path.join(out, "map.fot")),
                       single_process_map(spec, [s[0] for s in room_scans]))
