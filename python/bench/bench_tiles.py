@@ -94,8 +94,9 @@ def run(args):
     spec = tiles.MapSpec(0.02, rule="log_odds")
     lines += ["Tiled mapping: the three Kinect frames %d times over (%d scans, 2 cm cells, log-odds), one process "
               "(`insert_scan` scan by scan, one thread) against `pcl_fot.tiles.map_tiles` on a LocalCluster (its "
-              "start not counted), in turn in each of %d rounds, medians (each ratio the median of the rounds' ratios): the time to the tile set (tracing, the "
-              "tiles' files and the index), and apart, the time to stitch the tiles into one map in one process "
+              "start not counted), in turn in each of %d rounds, medians (each ratio the median of the rounds' "
+              "ratios): the time to the tile set (tracing, the tiles' files and the index), and apart, the time "
+              "to stitch the tiles into one map in one process "
               "(`open_tile_set`). "
               "Every stitched map was checked equal to the one-process map, cell for cell." % (
                   args.rounds, len(paths), args.repeats), "",
