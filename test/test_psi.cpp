@@ -161,24 +161,25 @@ TEST_P(PsiOnScans, TreesAndDistanceMapsAgreeOnScans) {
     const char* a;
     const char* b;
     double res;
-    std::uint32_t side;
   };
-  DistanceMap workspace;  // reused by the second case's larger cube
-  for (const Case& c : {Case{"kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02, 256},
-                        Case{"room_scan1.pcd", "room_scan2.pcd", 0.1, 512}}) {
+  DistanceMap workspace;  // reused by the second case, whose cube has another size
+  for (const Case& c : {Case{"kinect_capture0001.pcd", "kinect_capture0002.pcd", 0.02},
+                        Case{"room_scan1.pcd", "room_scan2.pcd", 0.1}}) {
     SCOPED_TRACE(c.a);
     const CellGrid grid(c.res);
     FastOctTree ta(grid), tb(grid);
     const auto ca = pcl_fot_test::loadScan(c.a), cb = pcl_fot_test::loadScan(c.b);
     insertPointCloud(ta, *ca);
     insertPointCloud(tb, *cb);
-    // The grids' cubes start at the scans' lowest cell.
-    Key lo{kMaxKey, kMaxKey, kMaxKey};
+    // The grids' cubes start at the scans' lowest cell and are just large enough to hold both.
+    Key lo{kMaxKey, kMaxKey, kMaxKey}, hi{kMinKey, kMinKey, kMinKey};
     for (const FastOctTree* t : {&ta, &tb})
       t->forEachCell(CellState::Occupied, [&](const Key& k) {
         lo = Key{std::min(lo.x, k.x), std::min(lo.y, k.y), std::min(lo.z, k.z)};
+        hi = Key{std::max(hi.x, k.x), std::max(hi.y, k.y), std::max(hi.z, k.z)};
       });
-    FastOccMesh ga(grid, c.side, lo), gb(grid, c.side, lo);
+    const std::uint32_t side = std::uint32_t(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z})) + 1;
+    FastOccMesh ga(grid, side, lo), gb(grid, side, lo);
     ASSERT_EQ(insertPointCloud(ga, *ca).out_of_range, 0u) << "the grid must hold the whole scan";
     ASSERT_EQ(insertPointCloud(gb, *cb).out_of_range, 0u);
     const PsiResult tree = psi(ta, tb), maps = psiByDistanceMaps(ga, gb);

@@ -1,6 +1,8 @@
 #pragma once
-// nanoflann behind PCL's KdTree interface, as PCL 1.15's pcl::search::KdTreeNanoflann puts it there (PCL
-// 1.13 has none): so PCL's algorithms can take it through setSearchMethod in the benchmarks.
+// nanoflann behind PCL's KdTree interface, set up as PCL 1.15's pcl::search::KdTreeNanoflann sets it up (PCL
+// 1.13 has none), so PCL's algorithms can take it through setSearchMethod and the benchmarks time what a PCL
+// user of nanoflann pays: the pass that maps valid points, the tree over the cloud's own memory where every
+// point is valid (a copy of the valid ones otherwise), and the indices mapped back after each query.
 
 #include <cmath>
 #include <memory>
@@ -8,9 +10,21 @@
 
 #include <pcl/search/kdtree.h>
 
-#include "nanoflann_points.h"
+#include <nanoflann.hpp>
 
 namespace fot_bench {
+
+/** nanoflann's dataset adaptor over `count` points of three floats, `stride` floats apart. */
+struct StridedPoints {
+  const float* xyz = nullptr;
+  std::size_t stride = 3, count = 0;
+  std::size_t kdtree_get_point_count() const { return count; }
+  float kdtree_get_pt(std::size_t i, std::size_t d) const { return xyz[stride * i + d]; }
+  template <typename Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
 
 /** A pcl::search::KdTree answered by a nanoflann tree (L2, float) with leaves of `leaf_size` points. */
 template <typename PointT>
@@ -29,15 +43,28 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
                      const pcl::IndicesConstPtr& indices = pcl::IndicesConstPtr()) override {
     this->input_ = cloud;
     this->indices_ = indices;
-    points_.xyz.clear();
-    ids_.clear();
+    mapping_.clear();
+    copy_.clear();
     const std::size_t n = indices ? indices->size() : cloud->size();
+    mapping_.reserve(n);
     for (std::size_t j = 0; j < n; ++j) {
       const pcl::index_t i = indices ? (*indices)[j] : pcl::index_t(j);
-      const PointT& p = (*cloud)[std::size_t(i)];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-      points_.xyz.insert(points_.xyz.end(), {p.x, p.y, p.z});
-      ids_.push_back(i);
+      if (finite((*cloud)[std::size_t(i)])) mapping_.push_back(i);
+    }
+    identity_ = true;
+    for (std::size_t j = 0; identity_ && j < mapping_.size(); ++j) identity_ = mapping_[j] == pcl::index_t(j);
+    points_.count = mapping_.size();
+    if (identity_ && !mapping_.empty()) {
+      points_.xyz = &(*cloud)[0].x;
+      points_.stride = sizeof(PointT) / sizeof(float);
+    } else {
+      copy_.reserve(3 * mapping_.size());
+      for (const pcl::index_t i : mapping_) {
+        const PointT& p = (*cloud)[std::size_t(i)];
+        copy_.insert(copy_.end(), {p.x, p.y, p.z});
+      }
+      points_.xyz = copy_.data();
+      points_.stride = 3;
     }
     tree_ = std::make_unique<Tree>(3, points_, nanoflann::KDTreeSingleIndexAdaptorParams(leaf_size_));
     tree_->buildIndex();
@@ -45,43 +72,72 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
 
   int nearestKSearch(const PointT& point, int k, pcl::Indices& k_indices,
                      std::vector<float>& k_sqr_distances) const override {
-    k_indices.clear();
-    k_sqr_distances.clear();
-    if (k <= 0 || ids_.empty() || !finite(point)) return 0;
+    if (k <= 0 || mapping_.empty() || !finite(point)) {
+      k_indices.clear();
+      k_sqr_distances.clear();
+      return 0;
+    }
+    const std::size_t n = std::min(std::size_t(k), mapping_.size());
+    k_indices.resize(n);
+    k_sqr_distances.resize(n);
+    nanoflann::KNNResultSet<float, pcl::index_t> result(n);
+    result.init(k_indices.data(), k_sqr_distances.data());
     const float q[3] = {point.x, point.y, point.z};
-    std::vector<unsigned> at(static_cast<std::size_t>(k));
-    k_sqr_distances.resize(std::size_t(k));
-    const std::size_t found = tree_->knnSearch(q, std::size_t(k), at.data(), k_sqr_distances.data());
-    k_sqr_distances.resize(found);
-    for (std::size_t i = 0; i < found; ++i) k_indices.push_back(ids_[at[i]]);
-    return int(found);
+    tree_->findNeighbors(result, q, nanoflann::SearchParams());
+    mapBack(k_indices);
+    return int(n);
   }
 
   int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices,
                    std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override {
     k_indices.clear();
     k_sqr_distances.clear();
-    if (!(radius > 0) || ids_.empty() || !finite(point)) return 0;
+    if (!(radius > 0) || mapping_.empty() || !finite(point)) return 0;
     const float q[3] = {point.x, point.y, point.z};
-    std::vector<std::pair<unsigned, float>> matches;
-    tree_->radiusSearch(q, float(radius * radius), matches, nanoflann::SearchParams(32, 0.0f, true));
-    if (max_nn > 0 && matches.size() > max_nn) matches.resize(max_nn);
-    for (const auto& m : matches) {
-      k_indices.push_back(ids_[m.first]);
-      k_sqr_distances.push_back(m.second);
+    const float r = float(radius), bound = r * r;  // squared in float, as PCL 1.15 does
+    if (max_nn > 0) {  // as PCL 1.15 with nanoflann before 1.5.1: the max_nn nearest, those beyond cut off
+      const std::size_t n = std::min(std::size_t(max_nn), mapping_.size());
+      k_indices.resize(n);
+      k_sqr_distances.resize(n);
+      nanoflann::KNNResultSet<float, pcl::index_t> result(n);
+      result.init(k_indices.data(), k_sqr_distances.data());
+      tree_->findNeighbors(result, q, nanoflann::SearchParams());
+      std::size_t kept = n;
+      while (kept > 0 && k_sqr_distances[kept - 1] > bound) --kept;
+      k_indices.resize(kept);
+      k_sqr_distances.resize(kept);
+      mapBack(k_indices);
+      return int(kept);
+    }
+    // As PCL 1.15 with nanoflann before 1.6: the pairs found, sorted, then split into the two vectors.
+    std::vector<std::pair<pcl::index_t, float>> matches;
+    tree_->radiusSearch(q, bound, matches, nanoflann::SearchParams(32, 0.0f, true));
+    k_indices.resize(matches.size());
+    k_sqr_distances.resize(matches.size());
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      k_indices[i] = identity_ ? matches[i].first : mapping_[std::size_t(matches[i].first)];
+      k_sqr_distances[i] = matches[i].second;
     }
     return int(matches.size());
   }
 
  private:
-  using Tree = NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>;
+  using Tree = nanoflann::KDTreeSingleIndexAdaptor<
+      nanoflann::L2_Simple_Adaptor<float, StridedPoints, float, pcl::index_t>, StridedPoints, 3,
+      pcl::index_t>;
+  void mapBack(pcl::Indices& indices) const {
+    if (!identity_)
+      for (pcl::index_t& i : indices) i = mapping_[std::size_t(i)];
+  }
   static bool finite(const PointT& p) {
     return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
   }
 
   std::size_t leaf_size_;
-  Points points_;
-  std::vector<pcl::index_t> ids_;
+  pcl::Indices mapping_;  // the tree's point i is the cloud's point mapping_[i]
+  bool identity_ = true;
+  std::vector<float> copy_;
+  StridedPoints points_;
   std::unique_ptr<Tree> tree_;
 };
 

@@ -20,6 +20,7 @@
 
 #include "bench_util.h"
 #include "nanoflann_points.h"
+#include "nanoflann_search.h"
 
 namespace fot_bench {
 namespace {
@@ -72,8 +73,9 @@ std::string pointLevel(const BenchScan& target, const BenchScan& source, double 
   for (const auto& p : *cloud)
     if (pcl::isFinite(p)) finite.xyz.insert(finite.xyz.end(), {p.x, p.y, p.z});
 
-  pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ> fot_l2(res), fot_l1(res);
-  fot_l1.setMetric(pcl::fot::Metric::Manhattan);
+  // The FOT searches are made anew in each round, as a user's code makes a search for a cloud.
+  using FotSearch = pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ>;
+  std::unique_ptr<FotSearch> fot_l2, fot_l1;
   pcl::KdTreeFLANN<pcl::PointXYZ> flann_l2;
   std::unique_ptr<flann::Index<flann::L1<float>>> flann_l1;
   std::unique_ptr<NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>> nano_l2;
@@ -82,14 +84,23 @@ std::string pointLevel(const BenchScan& target, const BenchScan& source, double 
   pcl::Indices idx;
   std::vector<float> dist;
   std::vector<Method> methods = {
-      {"FOT search, Euclidean", [&] { fot_l2.setInputCloud(Cloud::ConstPtr(new Cloud(*cloud))); },
+      {"FOT search, Euclidean",
+       [&] {
+         fot_l2 = std::make_unique<FotSearch>(res);
+         fot_l2->setInputCloud(cloud);
+       },
        [&](const pcl::PointXYZ& p, double& s) {
-         fot_l2.nearestKSearch(p, 1, idx, dist);
+         fot_l2->nearestKSearch(p, 1, idx, dist);
          s += dist[0];
        }},
-      {"FOT search, Manhattan", [&] { fot_l1.setInputCloud(Cloud::ConstPtr(new Cloud(*cloud))); },
+      {"FOT search, Manhattan",
+       [&] {
+         fot_l1 = std::make_unique<FotSearch>(res);
+         fot_l1->setMetric(pcl::fot::Metric::Manhattan);
+         fot_l1->setInputCloud(cloud);
+       },
        [&](const pcl::PointXYZ& p, double& s) {
-         fot_l1.nearestKSearch(p, 1, idx, dist);
+         fot_l1->nearestKSearch(p, 1, idx, dist);
          s += dist[0];
        }},
       {"pcl::KdTreeFLANN (L2)", [&] { flann_l2.setInputCloud(cloud); },
@@ -324,20 +335,23 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
       queries.push_back(pcl::PointXYZ(finite.xyz[i], finite.xyz[i + 1], finite.xyz[i + 2]));
     for (int ki = 0; ki < 3; ++ki) {
       const int k = ks[ki];
-      pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ> fot;
+      // Each built anew in each round, as a user's code makes a search for a cloud.
+      std::unique_ptr<pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ>> fot;
       pcl::KdTreeFLANN<pcl::PointXYZ> flann;
-      std::unique_ptr<NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>> nano;
+      std::unique_ptr<NanoflannKdTree<pcl::PointXYZ>> nano;
       pcl::Indices idx;
       std::vector<float> dist;
-      std::vector<unsigned> nano_idx(static_cast<std::size_t>(k));
-      std::vector<float> nano_dist(static_cast<std::size_t>(k));
       auto sumAll = [](const std::vector<float>& d, double& s) {
         for (float x : d) s += x;
       };
       std::vector<Method> methods = {
-          {"FOT", [&] { fot.setInputCloud(Cloud::ConstPtr(new Cloud(*cloud))); },
+          {"FOT",
+           [&] {
+             fot = std::make_unique<pcl::fot::search::FastOctTreeSearch<pcl::PointXYZ>>();
+             fot->setInputCloud(cloud);
+           },
            [&](const pcl::PointXYZ& p, double& s) {
-             fot.nearestKSearch(p, k, idx, dist);
+             fot->nearestKSearch(p, k, idx, dist);
              sumAll(dist, s);
            }},
           {"FLANN", [&] { flann.setInputCloud(cloud); },
@@ -347,20 +361,18 @@ std::string featureQueries(const std::vector<std::pair<std::string, Cloud::Ptr>>
            }},
           {"nanoflann",
            [&] {
-             nano.reset(new NanoTree<nanoflann::L2_Simple_Adaptor<float, Points>>(
-                 3, finite, nanoflann::KDTreeSingleIndexAdaptorParams(20)));
-             nano->buildIndex();
+             nano = std::make_unique<NanoflannKdTree<pcl::PointXYZ>>(20);
+             nano->setInputCloud(cloud);
            },
            [&](const pcl::PointXYZ& p, double& s) {
-             const float q[3] = {p.x, p.y, p.z};
-             nano->knnSearch(q, std::size_t(k), nano_idx.data(), nano_dist.data());
-             sumAll(nano_dist, s);
+             nano->nearestKSearch(p, k, idx, dist);
+             sumAll(dist, s);
            }},
       };
       const std::vector<Result> r = measure(methods, queries, repeats, name + format(", k = %d", k));
       double total[3];
       for (int m = 0; m < 3; ++m) total[m] = r[m].build_ms + r[m].query_ms;
-      const pcl::fot::PointIndex& index = fot.getPointIndex();
+      const pcl::fot::PointIndex& index = fot->getPointIndex();
       t.add({name, format("%zu", finite.xyz.size() / 3), format("%.4g m", index.resolution()),
              format("%.1f", double(index.size()) / double(index.tree().getOccupiedCount())), format("%d", k),
              format("%.1f", total[0]), format("%.1f", total[1]), format("%.1f", total[2]),
