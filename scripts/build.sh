@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Configures and builds pcl_fot in Release into build/: the library, the tools, fot_bench and the Python package
 # in build/python (two jobs: PCL's headers are heavy). The test suite has its own tree, built with the sanitizers (scripts/test_sanitizers.sh).
-# PCL_FOT_BUILD_BENCHMARKS=OFF leaves fot_bench out (scripts/run_tests.sh does: no test runs it).
+# PCL_FOT_BUILD_BENCHMARKS=OFF leaves fot_bench out (scripts/run_tests.sh does: its tests do not run it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Ninja for new build trees (a tree configured before keeps its generator): it schedules the two jobs better

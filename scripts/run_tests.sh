@@ -24,8 +24,8 @@ step() {  # <script>...: runs them (several side by side, each one's output afte
   ((failed == 0)) || { echo "a step failed: $*" >&2; exit 1; }
 }
 step install_deps.sh
-# The Release tree serves the package and Python tests. No test runs fot_bench (the sanitizers' tree, which
-# holds the suite, leaves it out as well): building it here cost about 200 CPU-s.
+# The Release tree serves the package and Python tests, which do not run fot_bench; the sanitizers' tree, which
+# holds the suite, leaves the benchmark out as well. Building it here cost about 200 CPU-s.
 PCL_FOT_BUILD_BENCHMARKS=OFF step build.sh
 # The package test and the Python tests each leave a core idle half the time (configure, pytest, Dask's start).
 step test_package.sh test_python.sh
