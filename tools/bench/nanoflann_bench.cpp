@@ -563,11 +563,10 @@ std::string benchSearchAgainstNanoflann(const std::vector<BenchScan>& scans, con
       "distances, the tree over the cloud's own memory where every point is finite (over a copy of the "
       "finite ones otherwise), indices mapped back after each query. Each method is made anew in each run "
       "and then queried through PCL's interface. 1-NN asks every finite query point, k = 10, 50 and the "
-      "radius search every fourth (all of "
-      "them for the small cloud, the terrain and the sweep). Small clouds are timed over enough runs to take "
-      "about a millisecond, and the time of one given. The last two columns compare each search's distances "
-      "with KdTreeFLANN's, query by query (nanoflann's through `tools/bench/nanoflann_search.h`, the same "
-      "tree and leaves).\n\n",
+      "radius search every fourth (all of them for the small cloud, the terrain and the sweep). Small clouds "
+      "are timed over enough runs to take about a millisecond, and the time of one given. The last two "
+      "columns compare each search's distances with KdTreeFLANN's, query by query (nanoflann's through "
+      "`tools/bench/nanoflann_search.h`, the same tree and leaves).\n\n",
       repeats,
       format("%d.%d.%d", NANOFLANN_VERSION >> 8, (NANOFLANN_VERSION >> 4) & 0xF, NANOFLANN_VERSION & 0xF)
           .c_str());
