@@ -4,27 +4,16 @@
 // user of nanoflann pays: the pass that maps valid points, the tree over the cloud's own memory where every
 // point is valid (a copy of the valid ones otherwise), and the indices mapped back after each query.
 
-#include <cmath>
+#include <algorithm>
 #include <memory>
 #include <vector>
 
+#include <pcl/common/point_tests.h>
 #include <pcl/search/kdtree.h>
 
-#include <nanoflann.hpp>
+#include "nanoflann_points.h"
 
 namespace fot_bench {
-
-/** nanoflann's dataset adaptor over `count` points of three floats, `stride` floats apart. */
-struct StridedPoints {
-  const float* xyz = nullptr;
-  std::size_t stride = 3, count = 0;
-  std::size_t kdtree_get_point_count() const { return count; }
-  float kdtree_get_pt(std::size_t i, std::size_t d) const { return xyz[stride * i + d]; }
-  template <typename Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
 
 /** A pcl::search::KdTree answered by a nanoflann tree (L2, float) with leaves of `leaf_size` points. */
 template <typename PointT>
@@ -49,7 +38,7 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
     mapping_.reserve(n);
     for (std::size_t j = 0; j < n; ++j) {
       const pcl::index_t i = indices ? (*indices)[j] : pcl::index_t(j);
-      if (finite((*cloud)[std::size_t(i)])) mapping_.push_back(i);
+      if (pcl::isFinite((*cloud)[std::size_t(i)])) mapping_.push_back(i);
     }
     identity_ = true;
     for (std::size_t j = 0; identity_ && j < mapping_.size(); ++j) identity_ = mapping_[j] == pcl::index_t(j);
@@ -72,41 +61,27 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
 
   int nearestKSearch(const PointT& point, int k, pcl::Indices& k_indices,
                      std::vector<float>& k_sqr_distances) const override {
-    if (k <= 0 || mapping_.empty() || !finite(point)) {
+    if (k <= 0 || mapping_.empty() || !pcl::isFinite(point)) {
       k_indices.clear();
       k_sqr_distances.clear();
       return 0;
     }
-    const std::size_t n = std::min(std::size_t(k), mapping_.size());
-    k_indices.resize(n);
-    k_sqr_distances.resize(n);
-    nanoflann::KNNResultSet<float, pcl::index_t> result(n);
-    result.init(k_indices.data(), k_sqr_distances.data());
     const float q[3] = {point.x, point.y, point.z};
-    tree_->findNeighbors(result, q, nanoflann::SearchParams());
-    mapBack(k_indices);
-    return int(n);
+    return int(nearest(q, std::size_t(k), k_indices, k_sqr_distances));
   }
 
   int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices,
                    std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override {
     k_indices.clear();
     k_sqr_distances.clear();
-    if (!(radius > 0) || mapping_.empty() || !finite(point)) return 0;
+    if (!(radius > 0) || mapping_.empty() || !pcl::isFinite(point)) return 0;
     const float q[3] = {point.x, point.y, point.z};
     const float r = float(radius), bound = r * r;  // squared in float, as PCL 1.15 does
     if (max_nn > 0) {  // as PCL 1.15 with nanoflann before 1.5.1: the max_nn nearest, those beyond cut off
-      const std::size_t n = std::min(std::size_t(max_nn), mapping_.size());
-      k_indices.resize(n);
-      k_sqr_distances.resize(n);
-      nanoflann::KNNResultSet<float, pcl::index_t> result(n);
-      result.init(k_indices.data(), k_sqr_distances.data());
-      tree_->findNeighbors(result, q, nanoflann::SearchParams());
-      std::size_t kept = n;
+      std::size_t kept = nearest(q, max_nn, k_indices, k_sqr_distances);
       while (kept > 0 && k_sqr_distances[kept - 1] > bound) --kept;
       k_indices.resize(kept);
       k_sqr_distances.resize(kept);
-      mapBack(k_indices);
       return int(kept);
     }
     // As PCL 1.15 with nanoflann before 1.6: the pairs found, sorted, then split into the two vectors.
@@ -115,9 +90,10 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
     k_indices.resize(matches.size());
     k_sqr_distances.resize(matches.size());
     for (std::size_t i = 0; i < matches.size(); ++i) {
-      k_indices[i] = identity_ ? matches[i].first : mapping_[std::size_t(matches[i].first)];
+      k_indices[i] = matches[i].first;
       k_sqr_distances[i] = matches[i].second;
     }
+    mapBack(k_indices);
     return int(matches.size());
   }
 
@@ -125,12 +101,21 @@ class NanoflannKdTree : public pcl::search::KdTree<PointT> {
   using Tree = nanoflann::KDTreeSingleIndexAdaptor<
       nanoflann::L2_Simple_Adaptor<float, StridedPoints, float, pcl::index_t>, StridedPoints, 3,
       pcl::index_t>;
+  /** The min(k, size) nearest, as PCL 1.15's k-NN: into the caller's vectors, indices mapped back. */
+  std::size_t nearest(const float q[3], std::size_t k, pcl::Indices& indices,
+                      std::vector<float>& distances) const {
+    const std::size_t n = std::min(k, mapping_.size());
+    indices.resize(n);
+    distances.resize(n);
+    nanoflann::KNNResultSet<float, pcl::index_t> result(n);
+    result.init(indices.data(), distances.data());
+    tree_->findNeighbors(result, q, nanoflann::SearchParams());
+    mapBack(indices);
+    return n;
+  }
   void mapBack(pcl::Indices& indices) const {
     if (!identity_)
       for (pcl::index_t& i : indices) i = mapping_[std::size_t(i)];
-  }
-  static bool finite(const PointT& p) {
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
   }
 
   std::size_t leaf_size_;
