@@ -268,15 +268,24 @@ TEST_P(Concurrency, OctreeLookAlikeSearchesFromManyThreads) {
     for (std::size_t i = 13 * t; i < cloud->size(); i += 13 * kThreads)
       ASSERT_TRUE(ask(shared, (*cloud)[i]) == serial[i / 13]) << "query " << i;
   });
-  // Leaf walks from many threads share the branch index.
-  std::size_t leaves = 0;
-  for (auto it = serial_octree.leaf_depth_begin(); it != serial_octree.leaf_depth_end(); ++it) ++leaves;
+  // Leaf walks from many threads share the branch index. Each takes every leaf's container, which gets its
+  // points from the build's runs as the threads race to it, while voxel searches read the same leaves.
+  std::size_t leaves = 0, points = 0;
+  for (auto it = serial_octree.leaf_depth_begin(); it != serial_octree.leaf_depth_end(); ++it)
+    ++leaves, points += it.getLeafContainer().getSize();
   OctreePointCloudSearch<pcl::PointXYZ> walked(0.1);
   fill(walked);
-  together([&](unsigned) {
-    std::size_t n = 0;
-    for (auto it = walked.leaf_depth_begin(); it != walked.leaf_depth_end(); ++it) ++n;
+  together([&](unsigned t) {
+    std::size_t n = 0, held = 0;
+    for (auto it = walked.leaf_depth_begin(); it != walked.leaf_depth_end(); ++it) {
+      ++n, held += it.getLeafContainer().getSize();
+      pcl::Indices voxel, serial_voxel;
+      const pcl::PointXYZ& q = (*cloud)[(n * kThreads + t) % cloud->size()];
+      ASSERT_EQ(walked.voxelSearch(q, voxel), serial_octree.voxelSearch(q, serial_voxel));
+      ASSERT_EQ(voxel, serial_voxel);
+    }
     ASSERT_EQ(n, leaves);
+    ASSERT_EQ(held, points);
   });
 }
 

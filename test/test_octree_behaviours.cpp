@@ -18,6 +18,7 @@
 //     _Box_Search, _Approx_Nearest_Neighbour_Search, _Neighbours_Within_Radius_Search
 //   Octree_Pointcloud_Ray_Traversal                OctreeSearch.RayThroughPointsFindsTheirVoxels
 //   Octree_Pointcloud_Bounds                       BoundingBox.*
+//   (none: leaves built as runs of one array)      OctreeContents.LeafContainersTake..., RunsOfGone...
 //
 // The rest is covered elsewhere: every iterator node by node, boxes, deletions and rays on scans
 // (test_octree_point_cloud); each leaf-holding class call for call (test_octree_family_agreement); every
@@ -41,6 +42,7 @@
 #include <pcl/octree/octree.h>
 
 #include <pcl_fot/pcl/octree/octree.h>
+#include <pcl_fot/pcl/octree/octree_leaf_nodes.h>
 
 using pcl::Indices;
 using pcl::PointXYZ;
@@ -656,6 +658,80 @@ TEST(OctreeContents, VoxelSearchListsEveryPointOfTheVoxel) {
   EXPECT_EQ(leaves, by_voxel.size());
   EXPECT_EQ(leaves, ours.getLeafCount());
   EXPECT_EQ(branches, ours.getBranchCount());
+}
+
+TEST(OctreeContents, LeafContainersTakeTheirPointsAndKeepWhatIsAddedThroughThem) {
+  // A cloud's leaves keep their indices in runs until a container is asked for; it is the leaf's from then
+  // on, as in PCL: indices added through it, voxels deleted and the cloud added again answer as PCL's.
+  const auto cloud = [] {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 4.0f);
+    Cloud::Ptr c(new Cloud);
+    for (int i = 0; i < 400; ++i) c->emplace_back(u(rng), u(rng), u(rng));
+    return c;
+  }();
+  pcl::octree::OctreePointCloudSearch<PointXYZ> ref(0.5);
+  pcl::fot::OctreePointCloudSearch<PointXYZ> ours(0.5);
+  ref.setInputCloud(cloud), ref.addPointsFromInputCloud();
+  ours.setInputCloud(cloud), ours.addPointsFromInputCloud();
+  const auto expectSameAnswers = [&](const char* when) {
+    SCOPED_TRACE(when);
+    ASSERT_EQ(ours.getLeafCount(), ref.getLeafCount());
+    for (std::size_t i = 0; i < cloud->size(); ++i) {
+      Indices found, pcl_found, near, pcl_near;
+      std::vector<float> d;
+      ASSERT_EQ(ours.voxelSearch((*cloud)[i], found), ref.voxelSearch((*cloud)[i], pcl_found)) << i;
+      ASSERT_EQ(found, pcl_found) << "point " << i;
+      ours.radiusSearch((*cloud)[i], 0.7, near, d);
+      ref.radiusSearch((*cloud)[i], 0.7, pcl_near, d);
+      ASSERT_EQ(near, pcl_near) << "point " << i;
+    }
+  };
+  expectSameAnswers("built");
+  std::size_t taken = 0;
+  auto it = ours.leaf_depth_begin();
+  for (auto pcl_it = ref.leaf_depth_begin(); pcl_it != ref.leaf_depth_end(); ++pcl_it, ++it) {
+    ASSERT_TRUE(it != ours.leaf_depth_end());
+    ASSERT_EQ(it.getCurrentOctreeKey(), pcl_it.getCurrentOctreeKey());
+    if (++taken % 2 == 0) continue;
+    ASSERT_EQ(it.getLeafContainer().getPointIndicesVector(),
+              pcl_it.getLeafContainer().getPointIndicesVector());
+    const pcl::index_t again = it.getLeafContainer().getPointIndex();  // a point of the voxel, twice
+    it.getLeafContainer().addPointIndex(again);
+    pcl_it.getLeafContainer().addPointIndex(again);
+  }
+  expectSameAnswers("indices added through every other container");
+  for (std::size_t i = 0; i < cloud->size(); i += 5) {
+    ours.deleteVoxelAtPoint((*cloud)[i]);
+    ref.deleteVoxelAtPoint((*cloud)[i]);
+  }
+  expectSameAnswers("voxels deleted");
+  ours.addPointsFromInputCloud();
+  ref.addPointsFromInputCloud();
+  expectSameAnswers("the cloud added again");
+}
+
+TEST(OctreeContents, RunsOfGoneLeavesArePackedAway) {
+  pcl::fot::OctreeLeafNodes<pcl::octree::OctreeContainerPointIndices> nodes;
+  std::vector<std::uint32_t> positions(1000);
+  Indices values(1000);
+  for (std::uint32_t i = 0; i < 1000; ++i) positions[i] = 999 - i, values[i] = pcl::index_t(3 * i);
+  for (int round = 0; round < 50; ++round) {
+    nodes.reserveRuns(positions.size());
+    nodes.addRun(0, positions.data(), positions.data() + 600, values.data());
+    nodes.addRun(1, positions.data() + 600, positions.data() + 1000, values.data());
+    Indices first, second;
+    nodes.appendIndices(0, first);
+    ASSERT_EQ(first.size(), 600u);
+    ASSERT_EQ(first.front(), 3 * 999);
+    ASSERT_EQ(nodes.size(1), 400u);
+    nodes.appendIndices(1, second);
+    ASSERT_EQ(nodes.node(1).getContainer().getPointIndicesVector(), second);  // leaf 1's container takes them
+    nodes.drop(0);                                                            // leaf 0 is gone
+    ASSERT_EQ(nodes.size(0), 0u);
+  }
+  // 50,000 indices went into runs; none is read any more, so little is kept.
+  EXPECT_LE(nodes.runIndices(), 6000u);
 }
 
 TEST(OctreeContents, DensityOfARegularGrid) {

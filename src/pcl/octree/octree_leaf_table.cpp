@@ -39,6 +39,10 @@ bool mortonLess(const WalkItem& a, const WalkItem& b) {
   return top != 0 ? a.key[axis] < b.key[axis] : a.level > b.level;
 }
 
+// A probe of the leaves' table is a cache miss (the table is much larger than the cache): batches of
+// look-ups prefetch this many ahead, so that several misses are in flight at once.
+constexpr std::size_t kProbesAhead = 8;
+
 /**
  * The positions of `value` in ascending order, equal values in their order: a radix sort, least
  * significant digit first, of values below 2^bits.
@@ -484,6 +488,33 @@ OctreeLeafTable::Slot OctreeLeafTable::leafForPoint(const Key& k, LeafId& id, bo
   return slot;
 }
 
+void OctreeLeafTable::leavesOfCells(const std::vector<Key>& cells, std::vector<Slot>& slots,
+                                    std::vector<bool>& created) {
+  slots.resize(cells.size());
+  created.assign(cells.size(), false);
+  if (cells.empty()) return;
+  const std::uint64_t before = version_++;
+  leaves_.reserve(leaves_.size() + cells.size());
+  std::vector<Key> fresh;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (i + kProbesAhead < cells.size()) leaves_.prefetch(LeafId{cells[i + kProbesAhead], 0});
+    bool added;
+    Slot& entry = leaves_.findOrAdd(LeafId{cells[i], 0}, added);
+    if (added) {
+      entry = takeSlot();
+      fresh.push_back(cells[i]);
+    }
+    slots[i] = entry;
+    created[i] = added;
+  }
+  tree_.insertKeys(fresh.data(), fresh.size(), CellState::Occupied);
+  last_id_ = LeafId{cells.back(), 0};
+  last_slot_ = slots.back();
+  branch_cache_.follow(before, version_, [&](BranchIndex& index) {
+    for (const Key& k : fresh) addToBranches(index, LeafId{k, 0});
+  });
+}
+
 OctreeLeafTable::Slot OctreeLeafTable::createLeaf(const octree::OctreeKey& key, bool& created) {
   const Key k = pclKeyToTreeKey(key);
   LeafId id;
@@ -512,6 +543,19 @@ OctreeLeafTable::Slot OctreeLeafTable::findLeaf(const octree::OctreeKey& key) co
   return leafOnPath(pclKeyToTreeKey(key), id);
 }
 
+void OctreeLeafTable::findLeaves(const std::vector<octree::OctreeKey>& keys, std::vector<Slot>& slots) const {
+  slots.resize(keys.size());
+  if (!holds_leaves_ || max_objs_per_leaf_ != 0) {
+    for (std::size_t i = 0; i < keys.size(); ++i) slots[i] = findLeaf(keys[i]);
+    return;
+  }
+  const auto id = [&](std::size_t i) { return LeafId{pclKeyToTreeKey(keys[i]), 0}; };
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (i + kProbesAhead < keys.size()) leaves_.prefetch(id(i + kProbesAhead));
+    slots[i] = leafOf(id(i));
+  }
+}
+
 OctreeLeafTable::Slot OctreeLeafTable::leafAt(const octree::OctreeKey& key, uindex_t depth) const {
   const std::uint32_t level = depth_ - depth;
   const Key corner = pclKeyToTreeKey(firstVoxel(key, level));
@@ -525,15 +569,17 @@ bool OctreeLeafTable::existLeaf(uindex_t x, uindex_t y, uindex_t z) const {
   return findLeaf(octree::OctreeKey(x, y, z)) != kNoLeaf;
 }
 
-void OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
-  if (((x | y | z) >> depth_) != 0) return;
+OctreeLeafTable::Slot OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
+  if (((x | y | z) >> depth_) != 0) return kNoLeaf;
   const Key target = pclKeyToTreeKey(octree::OctreeKey(x, y, z));
   const std::uint64_t before = version_++;
   LeafId gone{target, 0};
+  Slot slot = kNoLeaf;
   bool removed = false;
   if (holds_leaves_) {
     // The first leaf on the path goes, with every cell of its cube.
-    if (leafOnPath(target, gone) != kNoLeaf) {
+    slot = leafOnPath(target, gone);
+    if (slot != kNoLeaf) {
       const std::int32_t last = std::int32_t((std::int64_t(1) << gone.level) - 1);
       eraseLeaf(gone);
       tree_.setBox(gone.corner, Key{gone.corner.x + last, gone.corner.y + last, gone.corner.z + last},
@@ -569,6 +615,7 @@ void OctreeLeafTable::removeLeaf(uindex_t x, uindex_t y, uindex_t z) {
     if (!on_path || holds_voxels) break;
     phantoms_.erase(phantoms_.begin());
   }
+  return slot;
 }
 
 void OctreeLeafTable::clearLeaves() {

@@ -59,6 +59,10 @@ class PCL_EXPORTS OctreeLeafTable {
      * find and insert take two. Valid until the next change of the map.
      */
     Value& findOrAdd(const LeafId& id, bool& added);
+    /** Brings the cube's home entry towards the cache, for a look-up soon. */
+    void prefetch(const LeafId& id) const {
+      if (!entries_.empty()) __builtin_prefetch(&entries_[home(id)]);
+    }
     /** Removes the cube; false if it has no value. */
     bool erase(const LeafId& id);
     std::size_t size() const { return size_; }
@@ -211,6 +215,11 @@ class PCL_EXPORTS OctreeLeafTable {
 
   /** The leaf holding the voxel at this PCL key (the first leaf on its path); kNoLeaf if none. */
   Slot findLeaf(const octree::OctreeKey& key) const;
+  /**
+   * findLeaf for many keys at once, into `slots`: without dynamic depth the table's probes run ahead of the
+   * look-ups, as each is a cache miss.
+   */
+  void findLeaves(const std::vector<octree::OctreeKey>& keys, std::vector<Slot>& slots) const;
   /** The leaf at this depth and key (a node's key, as iterators give it); kNoLeaf if none. */
   Slot leafAt(const octree::OctreeKey& key, uindex_t depth) const;
   /**
@@ -234,20 +243,21 @@ class PCL_EXPORTS OctreeLeafTable {
   template <typename Visit>
   void leavesOfKeys(const std::vector<Key>& keys, Visit&& visit) {
     const std::vector<std::uint32_t> order = cellOrder(keys);
-    const auto sameCell = [&](std::size_t i, std::size_t j) {
-      const Key &a = keys[order[i]], &b = keys[order[j]];
-      return a.x == b.x && a.y == b.y && a.z == b.z;
-    };
-    std::size_t runs = 0;
-    for (std::size_t i = 0; i < order.size(); ++i) runs += i == 0 || !sameCell(i - 1, i);
-    leaves_.reserve(leaves_.size() + runs);
-    for (std::size_t begin = 0, end; begin < order.size(); begin = end) {
-      for (end = begin + 1; end < order.size() && sameCell(begin, end);) ++end;
-      LeafId id;
-      bool created;
-      const Slot slot = leafForPoint(keys[order[begin]], id, created);
-      visit(slot, created, order.data() + begin, order.data() + end);
+    std::vector<Key> cells;
+    std::vector<std::uint32_t> starts;  // each cell's first position in `order`, and the end
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const Key& k = keys[order[i]];
+      if (i == 0 || !(k.x == cells.back().x && k.y == cells.back().y && k.z == cells.back().z)) {
+        cells.push_back(k);
+        starts.push_back(std::uint32_t(i));
+      }
     }
+    starts.push_back(std::uint32_t(order.size()));
+    std::vector<Slot> slots;
+    std::vector<bool> created;
+    leavesOfCells(cells, slots, created);
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      visit(slots[c], bool(created[c]), order.data() + starts[c], order.data() + starts[c + 1]);
   }
   /** The leaf of this cube, created if there is none (PCL's expandLeafNode fills new leaves this way). */
   Slot leafOfCube(const LeafId& id, bool& created);
@@ -257,8 +267,11 @@ class PCL_EXPORTS OctreeLeafTable {
   LeafId cubeOf(const Key& k, std::uint32_t level) const;
   /** Whether the voxel at this PCL key is occupied; false beyond the box, where PCL drops the high bits. */
   bool existLeaf(uindex_t x, uindex_t y, uindex_t z) const;
-  /** Deletes the leaf holding the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
-  void removeLeaf(uindex_t x, uindex_t y, uindex_t z);
+  /**
+   * Deletes the leaf holding the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. Returns
+   * the deleted leaf's slot (kNoLeaf if none, or for the occupancy octree).
+   */
+  Slot removeLeaf(uindex_t x, uindex_t y, uindex_t z);
   /** Empties the leaves but keeps the bounding box. */
   void clearLeaves();
   /** Empties the leaves and resets the bounding box; the depth stays, as in PCL. */
@@ -292,6 +305,12 @@ class PCL_EXPORTS OctreeLeafTable {
                    const std::function<void(const octree::OctreeKey&)>& visit) const;
 
  private:
+  /**
+   * The leaves of distinct cells sorted as cellOrder sorts them, found or made as leafForPoint does without
+   * dynamic depth, with their slots and whether each is new: the table's probes run ahead of the inserts, the
+   * new cells go into the tree in that order through one accessor, and the branch index follows once.
+   */
+  void leavesOfCells(const std::vector<Key>& cells, std::vector<Slot>& slots, std::vector<bool>& created);
   /** The positions of `keys` sorted by cell (a radix sort), equal keys in their order. */
   static std::vector<std::uint32_t> cellOrder(const std::vector<Key>& keys);
   /** Whether the cube holds an occupied cell or an empty old root. */

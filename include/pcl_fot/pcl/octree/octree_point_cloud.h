@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <type_traits>
 #include <typeinfo>
@@ -17,6 +16,7 @@
 #include <Eigen/Core>
 
 #include <pcl_fot/pcl/octree/octree_containers.h>
+#include <pcl_fot/pcl/octree/octree_leaf_nodes.h>
 #include <pcl_fot/pcl/octree/octree_leaf_table.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
@@ -65,7 +65,11 @@ class OctreePointCloud {
   /** Whether leaves hold containers; the occupancy octree's leaves are the tree's cells. */
   static constexpr bool kHoldsLeaves = !std::is_same<LeafContainerT, OctreeContainerEmpty>::value;
   using LeafId = OctreeLeafTable::LeafId;
+
+ protected:
+  /** A leaf's number; reading a leaf by its slot leaves its points where they are (no container made). */
   using Slot = OctreeLeafTable::Slot;
+  static constexpr Slot kNoLeaf = OctreeLeafTable::kNoLeaf;
 
  public:
   /**
@@ -288,7 +292,9 @@ class OctreePointCloud {
   }
   /** Deletes the voxel at this PCL key, pruning as PCL does; a no-op beyond the box. */
   virtual void removeLeaf(uindex_t idx_x_arg, uindex_t idx_y_arg, uindex_t idx_z_arg) {
-    table_.removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
+    const Slot gone = table_.removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
+    if constexpr (kHoldsLeaves)
+      if (gone != kNoLeaf) nodes_.drop(gone);
   }
 
   std::size_t getLeafCount() const { return table_.leafCount(); }
@@ -331,6 +337,23 @@ class OctreePointCloud {
   LeafNode* leafAt(const octree::OctreeKey& key, uindex_t depth) const {
     return node(table_.leafAt(key, depth));
   }
+  /** The slot of the leaf holding the voxel at this PCL key; kNoLeaf if none. */
+  Slot findSlot(const octree::OctreeKey& key) const { return table_.findLeaf(key); }
+  /** findSlot for many keys at once, into `slots`. */
+  void findSlots(const std::vector<octree::OctreeKey>& keys, std::vector<Slot>& slots) const {
+    table_.findLeaves(keys, slots);
+  }
+  /** The slot of the leaf at the iterator. */
+  Slot slotAt(const NodeIterator& it) const { return it.walk_.node().slot; }
+  /** Appends the point indices of the leaf in this slot. */
+  void appendLeafIndices(Slot slot, Indices& out) const {
+    if constexpr (kHoldsLeaves) nodes_.appendIndices(slot, out);
+  }
+  /** The number of points of the leaf in this slot, as its container counts them. */
+  std::size_t leafSize(Slot slot) const {
+    if constexpr (kHoldsLeaves) return nodes_.size(slot);
+    return 0;
+  }
   bool isPointWithinBoundingBox(double x, double y, double z) const {
     return table_.isPointWithinBoundingBox(x, y, z);
   }
@@ -353,10 +376,9 @@ class OctreePointCloud {
   }
   /** Bumped by every change of the leaves, so that caches built from them know when they are stale. */
   std::uint64_t version() const { return table_.version(); }
-  /** Calls visit(container) for every leaf, in no particular order. */
-  template <typename Visit>
-  void forEachLeaf(Visit&& visit) const {
-    if constexpr (kHoldsLeaves) table_.forEachLeaf([&](Slot slot) { visit(nodes_[slot].getContainer()); });
+  /** Appends the point indices of every leaf, leaf after leaf in no particular order. */
+  void appendEveryLeafIndices(Indices& out) const {
+    table_.forEachLeaf([&](Slot slot) { appendLeafIndices(slot, out); });
   }
   /** Empties the leaves but keeps the bounding box (a new buffer of OctreePointCloudChangeDetector). */
   void clearLeaves() {
@@ -365,11 +387,9 @@ class OctreePointCloud {
   }
   /**
    * The leaf pcl::octree's approxNearestSearch descends to: at each depth, the existing child whose centre
-   * lies nearest to the point. nullptr if the descent meets an empty old root (where PCL asserts).
+   * lies nearest to the point. kNoLeaf if the descent meets an empty old root (where PCL asserts).
    */
-  const LeafNode* approxLeaf(const PointT& point) const {
-    return node(table_.approxLeaf(point.getVector3fMap()));
-  }
+  Slot approxSlot(const PointT& point) const { return table_.approxLeaf(point.getVector3fMap()); }
 
   PointCloudConstPtr input_;
   IndicesConstPtr indices_;
@@ -377,9 +397,9 @@ class OctreePointCloud {
  private:
   /** The leaf node in this slot; nullptr for none. The occupancy octree's leaves share one empty node. */
   LeafNode* node(Slot slot) const {
-    if (slot == OctreeLeafTable::kNoLeaf) return nullptr;
+    if (slot == kNoLeaf) return nullptr;
     if constexpr (kHoldsLeaves) {
-      return &nodes_[slot];
+      return &nodes_.node(slot);
     } else {
       static LeafNode empty_leaf;
       return &empty_leaf;
@@ -397,9 +417,7 @@ class OctreePointCloud {
 
   double epsilon_ = 0.0;
   OctreeLeafTable table_;
-  // The leaves' nodes by slot (a deque keeps them in place as it grows). Mutable as PCL's nodes are: const
-  // lookups hand out leaves callers may fill.
-  mutable std::deque<LeafNode> nodes_;
+  OctreeLeafNodes<LeafContainerT> nodes_;  // the leaves' nodes by slot
 };
 
 /** PCL's occupancy octree: its leaves are the tree's cells and hold nothing. */

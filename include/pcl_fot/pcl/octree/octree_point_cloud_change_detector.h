@@ -42,9 +42,9 @@ class OctreePointCloudChangeDetector : public OctreePointCloud<PointT, LeafConta
       const uindex_t level = this->getTreeDepth() - it.getCurrentOctreeDepth();
       const octree::OctreeKey first_voxel = OctreeLeafTable::firstVoxel(key, level);
       if (previous_.getCell(this->pclKeyToTreeKey(first_voxel)) == CellState::Occupied) continue;
-      const LeafContainerT& leaf = it.getLeafContainer();
-      if (static_cast<uindex_t>(leaf.getSize()) >= minPointsPerLeaf_arg)
-        leaf.getPointIndices(indicesVector_arg);
+      const auto leaf = this->slotAt(it);
+      if (static_cast<uindex_t>(this->leafSize(leaf)) >= minPointsPerLeaf_arg)
+        this->appendLeafIndices(leaf, indicesVector_arg);
     }
     return static_cast<uindex_t>(indicesVector_arg.size());
   }

@@ -91,13 +91,15 @@ class OctreePointCloudSearch : public OctreePointCloud<PointT, LeafContainerT, B
   bool addsPointsInBulk() const override { return typeid(*this) == typeid(OctreePointCloudSearch); }
 
  private:
+  using typename OctreeT::Slot;
+
   /** The index of the octree's points, rebuilt when the octree has changed since. */
   std::shared_ptr<const PointIndex> pointIndex() const;
   /**
    * The leaves whose voxels meet the box [lo, hi] (and one voxel around it), in PCL's depth-first order:
    * those a radius or box search visits.
    */
-  std::vector<const LeafNode*> leavesAround(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  std::vector<Slot> leavesAround(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   /** The input cloud's point at `index`, or nullptr (with PCL_ERROR) if there is none. */
   const PointT* inputPoint(uindex_t index, const char* caller) const;
   /** Whether a query can be answered: the point finite, the octree holding points. */

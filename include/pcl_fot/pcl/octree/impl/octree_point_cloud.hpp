@@ -30,12 +30,7 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::setResolution(d
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 typename OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::LeafNode*
 OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::slotNode(Slot slot, bool created) {
-  if constexpr (kHoldsLeaves) {
-    if (slot == nodes_.size())
-      nodes_.emplace_back();
-    else if (created)
-      nodes_[slot] = LeafNode();
-  }
+  if constexpr (kHoldsLeaves) nodes_.reset(slot, created);
   return node(slot);
 }
 
@@ -77,8 +72,9 @@ LeafContainerT* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::find
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::expandLeaf(const LeafId& id, Slot slot) {
   Indices indices;
-  nodes_[slot].getContainer().getPointIndices(indices);
+  nodes_.appendIndices(slot, indices);
   table_.eraseLeaf(id);
+  nodes_.drop(slot);
   for (const index_t index : indices) {
     const PointT& p = (*input_)[index];
     const Key k = table_.pclKeyToTreeKey(table_.pclKey(p.x, p.y, p.z));
@@ -179,8 +175,16 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addInBulk(Indic
     keys.push_back(table_.pclKeyToTreeKey(table_.pclKey(p.x, p.y, p.z)));
     points[kept++] = points[next];
   }
+  if constexpr (decltype(nodes_)::kRuns) nodes_.reserveRuns(keys.size());
   table_.leavesOfKeys(keys, [&](Slot slot, bool created, const std::uint32_t* first,
                                 const std::uint32_t* last) {
+    // A new leaf of point indices gets them as a run, in the cloud's order, as addPointIndex would add them.
+    if constexpr (decltype(nodes_)::kRuns) {
+      if (created) {
+        nodes_.addRun(slot, first, last, points.data());
+        return;
+      }
+    }
     LeafContainerT& leaf = slotNode(slot, created)->getContainer();
     if constexpr (std::is_base_of_v<OctreeContainerPointIndices, LeafContainerT>)  // one allocation a leaf
       leaf.getPointIndicesVector().reserve(leaf.getSize() + static_cast<std::size_t>(last - first));
@@ -382,12 +386,12 @@ uindex_t OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::getIntersec
     Eigen::Vector3f origin, Eigen::Vector3f direction, Indices& k_indices, uindex_t max_voxel_count) const {
   k_indices.clear();
   uindex_t voxels = 0;
-  const LeafNode* previous = nullptr;  // a shallow leaf spans several cells in a row
+  Slot previous = kNoLeaf;  // a shallow leaf spans several cells in a row
   table_.walkRay(origin, direction, [&](const octree::OctreeKey& key) {
-    const LeafNode* leaf = findLeaf(key);
-    if (!leaf || leaf == previous) return true;
+    const Slot leaf = findSlot(key);
+    if (leaf == kNoLeaf || leaf == previous) return true;
     previous = leaf;
-    leaf->getContainer().getPointIndices(k_indices);
+    appendLeafIndices(leaf, k_indices);
     return max_voxel_count == 0 || ++voxels < max_voxel_count;
   });
   return static_cast<uindex_t>(k_indices.size());

@@ -41,7 +41,7 @@ std::shared_ptr<const PointIndex>
 OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::pointIndex() const {
   return cache_.get(this->version(), [&] {
     Indices points;
-    this->forEachLeaf([&](const LeafContainerT& leaf) { leaf.getPointIndices(points); });
+    this->appendEveryLeafIndices(points);
     // Indices beyond the cloud (it was swapped for a smaller one) are left out, not read.
     const auto size = static_cast<index_t>(this->input_->size());
     points.erase(std::remove_if(points.begin(), points.end(), [&](index_t i) { return i < 0 || i >= size; }),
@@ -71,7 +71,7 @@ void OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::removeLea
                                                                                   uindex_t idx_z_arg) {
   Indices gone;
   if (this->existLeaf(idx_x_arg, idx_y_arg, idx_z_arg))
-    this->findLeaf(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg))->getContainer().getPointIndices(gone);
+    this->appendLeafIndices(this->findSlot(octree::OctreeKey(idx_x_arg, idx_y_arg, idx_z_arg)), gone);
   const std::uint64_t before = this->version();
   OctreeT::removeLeaf(idx_x_arg, idx_y_arg, idx_z_arg);
   cache_.follow(before, this->version(),
@@ -104,10 +104,10 @@ bool OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::canSearch
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
-std::vector<const typename OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::LeafNode*>
+std::vector<typename OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::Slot>
 OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::leavesAround(
     const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const {
-  std::vector<const LeafNode*> leaves;
+  std::vector<Slot> leaves;
   if (this->getLeafCount() == 0 || !(lo.array() <= hi.array()).all()) return leaves;
   double box_lo[3], box_hi[3];
   this->getBoundingBox(box_lo[0], box_lo[1], box_lo[2], box_hi[0], box_hi[1], box_hi[2]);
@@ -146,19 +146,22 @@ OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::leavesAround(
   });
   // A shallow leaf (dynamic depth) spans consecutive cells in this order: it is listed once.
   std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& f : found) {
-    const LeafNode* leaf = this->findLeaf(f.second);
-    if (leaf && (leaves.empty() || leaves.back() != leaf)) leaves.push_back(leaf);
-  }
+  std::vector<octree::OctreeKey> keys(found.size());
+  for (std::size_t i = 0; i < found.size(); ++i) keys[i] = found[i].second;
+  std::vector<Slot> slots;
+  this->findSlots(keys, slots);
+  for (const Slot leaf : slots)
+    if (leaf != OctreeT::kNoLeaf && (leaves.empty() || leaves.back() != leaf)) leaves.push_back(leaf);
   return leaves;
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 bool OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::voxelSearch(
     const PointT& point, Indices& point_idx_data) const {
-  const LeafContainerT* leaf = this->findLeafAtPoint(point);
-  if (!leaf) return false;
-  leaf->getPointIndices(point_idx_data);
+  if (!this->isPointWithinBoundingBox(point.x, point.y, point.z)) return false;
+  const Slot leaf = this->findSlot(this->pclKey(point.x, point.y, point.z));
+  if (leaf == OctreeT::kNoLeaf) return false;
+  this->appendLeafIndices(leaf, point_idx_data);
   return true;
 }
 
@@ -197,10 +200,10 @@ template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 void OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::approxNearestSearch(
     const PointT& p_q, index_t& result_index, float& sqr_distance) const {
   if (!canSearch(p_q, "approxNearestSearch")) return;
-  const LeafNode* leaf = this->approxLeaf(p_q);
-  if (!leaf) return;
+  const Slot leaf = this->approxSlot(p_q);
+  if (leaf == OctreeT::kNoLeaf) return;
   Indices points;
-  leaf->getContainer().getPointIndices(points);
+  this->appendLeafIndices(leaf, points);
   float smallest = std::numeric_limits<float>::max();
   for (const index_t i : points) {
     const float d = detail::octreeSquaredDistance((*this->input_)[i], p_q);
@@ -232,9 +235,9 @@ uindex_t OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::radiu
   const Eigen::Vector3d reach = Eigen::Vector3d::Constant(radius);
   const double radius_squared = radius * radius;
   Indices points;
-  for (const LeafNode* leaf : leavesAround(q - reach, q + reach)) {
+  for (const Slot leaf : leavesAround(q - reach, q + reach)) {
     points.clear();
-    leaf->getContainer().getPointIndices(points);
+    this->appendLeafIndices(leaf, points);
     for (const index_t i : points) {
       const float d = detail::octreeSquaredDistance((*this->input_)[i], p_q);
       if (d > radius_squared) continue;
@@ -265,9 +268,9 @@ uindex_t OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::boxSe
     return 0;
   }
   Indices points;
-  for (const LeafNode* leaf : leavesAround(min_pt.cast<double>(), max_pt.cast<double>())) {
+  for (const Slot leaf : leavesAround(min_pt.cast<double>(), max_pt.cast<double>())) {
     points.clear();
-    leaf->getContainer().getPointIndices(points);
+    this->appendLeafIndices(leaf, points);
     for (const index_t i : points) {
       const PointT& p = (*this->input_)[i];
       if (p.x >= min_pt(0) && p.x <= max_pt(0) && p.y >= min_pt(1) && p.y <= max_pt(1) && p.z >= min_pt(2) &&
