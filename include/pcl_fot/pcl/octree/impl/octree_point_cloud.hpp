@@ -231,7 +231,9 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointToCloud
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::isVoxelOccupiedAtPoint(
     const PointT& point_arg) const {
-  return findLeafAtPoint(point_arg) != nullptr;
+  // By slot: asking does not give a leaf of runs its node.
+  return isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z) &&
+         findSlot(pclKey(point_arg.x, point_arg.y, point_arg.z)) != kNoLeaf;
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
