@@ -339,6 +339,11 @@ class OctreePointCloud {
   }
   /** The slot of the leaf holding the voxel at this PCL key; kNoLeaf if none. */
   Slot findSlot(const octree::OctreeKey& key) const { return table_.findLeaf(key); }
+  /** The slot of the leaf whose voxel holds the point; kNoLeaf if none or outside the box. */
+  Slot slotAtPoint(const PointT& point) const {
+    if (!isPointWithinBoundingBox(point.x, point.y, point.z)) return kNoLeaf;
+    return findSlot(pclKey(point.x, point.y, point.z));
+  }
   /** findSlot for many keys at once, into `slots`. */
   void findSlots(const std::vector<octree::OctreeKey>& keys, std::vector<Slot>& slots) const {
     table_.findLeaves(keys, slots);

@@ -231,16 +231,13 @@ void OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::addPointToCloud
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 bool OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::isVoxelOccupiedAtPoint(
     const PointT& point_arg) const {
-  // By slot: asking does not give a leaf of runs its node.
-  return isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z) &&
-         findSlot(pclKey(point_arg.x, point_arg.y, point_arg.z)) != kNoLeaf;
+  return slotAtPoint(point_arg) != kNoLeaf;  // asking gives no leaf of runs its node
 }
 
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 LeafContainerT* OctreePointCloud<PointT, LeafContainerT, BranchContainerT>::findLeafAtPoint(
     const PointT& point_arg) const {
-  if (!isPointWithinBoundingBox(point_arg.x, point_arg.y, point_arg.z)) return nullptr;
-  LeafNode* leaf = findLeaf(pclKey(point_arg.x, point_arg.y, point_arg.z));
+  LeafNode* leaf = node(slotAtPoint(point_arg));
   return leaf ? leaf->getContainerPtr() : nullptr;
 }
 

@@ -158,8 +158,7 @@ OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::leavesAround(
 template <typename PointT, typename LeafContainerT, typename BranchContainerT>
 bool OctreePointCloudSearch<PointT, LeafContainerT, BranchContainerT>::voxelSearch(
     const PointT& point, Indices& point_idx_data) const {
-  if (!this->isPointWithinBoundingBox(point.x, point.y, point.z)) return false;
-  const Slot leaf = this->findSlot(this->pclKey(point.x, point.y, point.z));
+  const Slot leaf = this->slotAtPoint(point);
   if (leaf == OctreeT::kNoLeaf) return false;
   this->appendLeafIndices(leaf, point_idx_data);
   return true;
