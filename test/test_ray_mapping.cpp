@@ -277,6 +277,98 @@ TEST(ScanInsertion, LineBurstOnAndOffAgreeOnTheBlocksTheWriterRemembers) {
   EXPECT_GT(tree.getFreeCount(), 50000u);
 }
 
+namespace {
+
+/** A depth camera's frame of a scene with a slanted floor, a wall and a box in front: `w` x `h` rays. */
+std::vector<float> depthFrame(const float sensor[3], int w, int h) {
+  std::vector<float> xyz;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float d[3] = {1.1f * (float(x) / float(w - 1) - 0.5f), 0.8f * (float(y) / float(h - 1) - 0.5f),
+                          1.0f};
+      float t = 3.0f;                                                          // the wall
+      if (d[1] > 0.05f) t = std::min(t, 0.9f / d[1]);                          // the floor, seen at a slant
+      if (std::fabs(d[0] - 0.1f) < 0.12f && std::fabs(d[1]) < 0.1f) t = 1.2f;  // the box
+      for (int a = 0; a < 3; ++a) xyz.push_back(sensor[a] + t * d[a]);
+    }
+  return xyz;
+}
+
+/** traceScan's cells against the union of traceSegment's over the rays, plus the endpoints. */
+void expectPlainWalksUnion(const std::vector<float>& xyz, const float sensor[3], double res, unsigned threads,
+                           double min_skipped) {
+  FastOctTree map(res);
+  ScanOptions options;
+  options.threads = threads;
+  ScanStats stats;
+  const std::vector<ScanBlock> blocks =
+      traceScan(map, sensor, xyz.data(), xyz.size() / 3, 3 * sizeof(float), options, &stats);
+  std::vector<Key> got_passed, got_hit, passed, hit;
+  for (const ScanBlock& b : blocks)
+    for (unsigned bit = 0; bit < 64; ++bit) {
+      const Key k = detail::block_cells::cellKey(b.at, bit);
+      if (b.hit >> bit & 1u)
+        got_hit.push_back(k);
+      else if (b.passed >> bit & 1u)
+        got_passed.push_back(k);
+    }
+  const CellGrid& grid = map.getGrid();
+  std::uint64_t cells = 0;
+  for (std::size_t i = 0; i < xyz.size(); i += 3) {
+    cells += traceSegment(grid, sensor, &xyz[i], [&](const Key& k) { passed.push_back(k); });
+    Key k;
+    ASSERT_TRUE(grid.pointToKey(xyz[i], xyz[i + 1], xyz[i + 2], k));
+    hit.push_back(k);
+  }
+  const auto distinct = [](std::vector<Key>& keys) {
+    const auto less = [](const Key& a, const Key& b) {
+      return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(keys.begin(), keys.end(), less);
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  };
+  distinct(passed), distinct(hit), distinct(got_passed), distinct(got_hit);
+  std::vector<Key> missed;  // passed, and no endpoint
+  for (const Key& k : passed)
+    if (!std::binary_search(hit.begin(), hit.end(), k, [](const Key& a, const Key& b) {
+          return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+        }))
+      missed.push_back(k);
+  EXPECT_EQ(stats.ray_cells, cells);
+  EXPECT_TRUE(got_hit == hit) << got_hit.size() << " endpoints, expected " << hit.size();
+  EXPECT_TRUE(got_passed == missed) << got_passed.size() << " cells passed, expected " << missed.size();
+  EXPECT_GE(double(stats.skipped_cells), min_skipped * double(cells))
+      << "the bundles passed " << stats.skipped_cells << " of " << cells << " cells";
+}
+
+}  // namespace
+
+TEST(RayBundles, ADenseFramesCellsAreThoseOfItsPlainWalks) {
+  // The frame's rays cross each cell near the sensor many times: most of their walks are bundled, and
+  // the cells stay exactly the plain walk's. A sensor off the grid, and one on a cell corner, where a
+  // power-of-two resolution makes the rays' crossings tie.
+  const float off_grid[3] = {0.013f, -0.027f, 0.0049f}, corner[3] = {0.0f, 0.0f, 0.0f};
+  expectPlainWalksUnion(depthFrame(off_grid, 160, 120), off_grid, 0.05, 1, 0.6);
+  expectPlainWalksUnion(depthFrame(corner, 160, 120), corner, 0.0625, 2, 0.6);
+}
+
+TEST(RayBundles, RaysEveryWayAndOfEveryLengthKeepTheirCells) {
+  // All six faces of the bundles' cube, rays from one cell long to far, a cluster of parallel rays.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), length(0.01f, 6.0f);
+  const float sensor[3] = {0.31f, -0.77f, 1.05f};
+  std::vector<float> xyz;
+  for (int i = 0; i < 30000; ++i) {
+    float d[3] = {unit(rng), unit(rng), unit(rng)};
+    const float norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), t = length(rng);
+    for (int a = 0; a < 3; ++a) xyz.push_back(sensor[a] + t * d[a] / norm);
+  }
+  for (int i = 0; i < 2000; ++i)
+    for (float c : {sensor[0] + 4.0f, sensor[1] + 1e-5f * float(i % 40), sensor[2] + 1e-5f * float(i / 40)})
+      xyz.push_back(c);
+  expectPlainWalksUnion(xyz, sensor, 0.05, 2, 0.0);
+}
+
 TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {
   // At 1 mm, rays of a kilometre pass more cells than the block walker's words span; they walk cell by
   // cell. The short ones walk in blocks. Together they must free exactly traceSegment's cells.

@@ -45,6 +45,8 @@ py::dict statsDict(const pcl::fot::ScanStats& s) {
   d["out_of_range"] = s.out_of_range;
   d["outside_region"] = s.outside_region;
   d["ray_cells"] = s.ray_cells;
+  d["free_cells"] = s.free_cells;
+  d["skipped_cells"] = s.skipped_cells;
   return d;
 }
 

@@ -1,6 +1,7 @@
 #include "mapping/block_ray_walker.h"
 
 #include <cstdlib>
+#include <limits>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define PCL_FOT_X86_LANES 1
@@ -64,7 +65,11 @@ constexpr std::uint64_t kBias = std::uint64_t(1) << 20;
 
 BlockRayWalker::BlockRayWalker(const CellGrid& grid, const float sensor[3], const float* ends,
                                std::size_t count, Lanes lanes)
-    : grid_(grid), sensor_(sensor), ends_(ends), count_(count), path_(Path::Scalar) {
+    : BlockRayWalker(grid, sensor, ends, nullptr, count, lanes) {}
+
+BlockRayWalker::BlockRayWalker(const CellGrid& grid, const float sensor[3], const float* ends,
+                               const double* cuts, std::size_t count, Lanes lanes)
+    : grid_(grid), sensor_(sensor), ends_(ends), cuts_(cuts), count_(count), path_(Path::Scalar) {
 #ifdef PCL_FOT_X86_LANES
   const bool avx2 = lanes != Lanes::Scalar && __builtin_cpu_supports("avx2");
   const bool avx512 =
@@ -130,33 +135,73 @@ std::size_t BlockRayWalker::nextScalar() {
   return n;
 }
 
-bool BlockRayWalker::startRay(int lane) {
-  live_[lane] = 0;
-  while (next_ray_ < count_) {
-    const float* end = ends_ + 3 * next_ray_++;
+void BlockRayWalker::prepare() {
+  // Walks start at the sensor's cell, even where rounding puts the first crossing before it.
+  constexpr double kNoCut = -std::numeric_limits<double>::infinity();
+  ready_next_ = ready_count_ = 0;
+  double tmax[3][kReady], tdelta[3][kReady], cut[kReady];
+  std::int64_t skip[3][kReady] = {};
+  int step[3][kReady];
+  while (ready_count_ < kReady && next_ray_ < count_) {
+    const std::size_t index = next_ray_++;
+    const float* end = ends_ + 3 * index;
     Key to;
     if (!grid_.pointToKey(end[0], end[1], end[2], to) || to == from_) continue;  // as traceSegment
     const RaySetup ray = setupRay(grid_, sensor_, end);
     const DdaStart s = ddaStart(grid_, from_, ray.origin, ray.direction);
+    const int r = ready_count_++;
+    Ready& ready = ready_[r];
     const std::int32_t from_key[3] = {from_.x, from_.y, from_.z}, to_key[3] = {to.x, to.y, to.z};
-    std::int64_t span = 0;
+    ready.span = 0;
     for (int a = 0; a < 3; ++a) {
       // +1 is the axis's lowest bit; -1 all of its bits, with the carry running out of the top.
-      inc_[a][lane] = s.step[a] > 0 ? std::int64_t(kAxisBits[a] & (~kAxisBits[a] + 1))
-                                    : (s.step[a] < 0 ? std::int64_t(kAxisBits[a]) : 0);
-      tmax_[a][lane] = s.tmax[a];
-      tdelta_[a][lane] = s.tdelta[a];
-      span += std::abs(std::int64_t(to_key[a]) - from_key[a]);
+      ready.inc[a] = s.step[a] > 0 ? std::int64_t(kAxisBits[a] & (~kAxisBits[a] + 1))
+                                   : (s.step[a] < 0 ? std::int64_t(kAxisBits[a]) : 0);
+      tmax[a][r] = s.tmax[a];
+      tdelta[a][r] = ready.tdelta[a] = s.tdelta[a];
+      step[a][r] = s.step[a];
+      ready.span += std::abs(std::int64_t(to_key[a]) - from_key[a]);
     }
-    cell_[lane] = std::int64_t(start_);
-    end_[lane] = std::int64_t(word(TreeCoord(to)));
-    length_[lane] = ray.length;
-    left_[lane] = span_[lane] = span;
-    mask_[lane] = std::uint64_t(1) << (start_ & 63u);
-    live_[lane] = -1;
-    return true;
+    ready.end = std::int64_t(word(TreeCoord(to)));
+    ready.length = ray.length;
+    cut[r] = cuts_ && cuts_[index] > 0.0 ? cuts_[index] : kNoCut;
   }
-  return false;
+  for (int r = ready_count_; r < kReady; ++r) {
+    cut[r] = kNoCut;
+    for (int a = 0; a < 3; ++a) tmax[a][r] = tdelta[a][r] = 0.0;
+  }
+  if (cuts_) forward(tmax, tdelta, cut, skip);
+  for (int r = 0; r < ready_count_; ++r) {
+    Ready& ready = ready_[r];
+    const std::int64_t skipped = skip[0][r] + skip[1][r] + skip[2][r];
+    const std::int32_t at[3] = {from_.x + std::int32_t(step[0][r] * skip[0][r]),
+                                from_.y + std::int32_t(step[1][r] * skip[1][r]),
+                                from_.z + std::int32_t(step[2][r] * skip[2][r])};
+    ready.cell = skipped ? std::int64_t(word(TreeCoord(Key{at[0], at[1], at[2]}))) : std::int64_t(start_);
+    ready.left = ready.span - skipped;
+    for (int a = 0; a < 3; ++a) ready.tmax[a] = tmax[a][r];
+    skipped_ += std::uint64_t(skipped);
+  }
+}
+
+bool BlockRayWalker::startRay(int lane) {
+  live_[lane] = 0;
+  if (ready_next_ == ready_count_) prepare();
+  if (ready_next_ == ready_count_) return false;
+  const Ready& ready = ready_[ready_next_++];
+  for (int a = 0; a < 3; ++a) {
+    inc_[a][lane] = ready.inc[a];
+    tmax_[a][lane] = ready.tmax[a];
+    tdelta_[a][lane] = ready.tdelta[a];
+  }
+  cell_[lane] = ready.cell;
+  end_[lane] = ready.end;
+  length_[lane] = ready.length;
+  span_[lane] = ready.span;
+  left_[lane] = ready.left;
+  mask_[lane] = std::uint64_t(1) << (ready.cell & 63u);
+  live_[lane] = -1;
+  return true;
 }
 
 void BlockRayWalker::finishStep(int l, bool beyond, bool crossed, std::size_t& n) {
@@ -174,7 +219,46 @@ void BlockRayWalker::finishStep(int l, bool beyond, bool crossed, std::size_t& n
   startRay(l);
 }
 
+void BlockRayWalker::forward(double (&tmax)[3][kReady], const double (&tdelta)[3][kReady],
+                             const double (&cut)[kReady], std::int64_t (&skip)[3][kReady]) const {
 #ifdef PCL_FOT_X86_LANES
+  if (path_ != Path::Scalar) return forwardAvx2(tmax, tdelta, cut, skip);
+#endif
+  for (int r = 0; r < kReady; ++r)
+    for (int a = 0; a < 3; ++a)
+      for (; tmax[a][r] < cut[r]; ++skip[a][r]) tmax[a][r] += tdelta[a][r];
+}
+
+#ifdef PCL_FOT_X86_LANES
+/** forward's additions, the rays' axes side by side in vector lanes: 6 independent chains. */
+__attribute__((target("avx2"))) void BlockRayWalker::forwardAvx2(double (&tmax)[3][kReady],
+                                                                 const double (&tdelta)[3][kReady],
+                                                                 const double (&cut)[kReady],
+                                                                 std::int64_t (&skip)[3][kReady]) {
+  static_assert(kReady == 8, "two groups of four rays");
+  __m256d t[6], d[6];
+  __m256i n[6];
+  const __m256d c[2] = {_mm256_loadu_pd(cut), _mm256_loadu_pd(cut + 4)};
+  for (int j = 0; j < 6; ++j) {
+    t[j] = _mm256_loadu_pd(tmax[j / 2] + 4 * (j % 2));
+    d[j] = _mm256_loadu_pd(tdelta[j / 2] + 4 * (j % 2));
+    n[j] = _mm256_setzero_si256();
+  }
+  for (int any = 1; any;) {
+    any = 0;
+    for (int j = 0; j < 6; ++j) {
+      const __m256d m = _mm256_cmp_pd(t[j], c[j % 2], _CMP_LT_OQ);
+      t[j] = _mm256_add_pd(t[j], _mm256_and_pd(m, d[j]));
+      n[j] = _mm256_sub_epi64(n[j], _mm256_castpd_si256(m));
+      any |= _mm256_movemask_pd(m);
+    }
+  }
+  for (int j = 0; j < 6; ++j) {
+    _mm256_storeu_pd(tmax[j / 2] + 4 * (j % 2), t[j]);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(skip[j / 2] + 4 * (j % 2)), n[j]);
+  }
+}
+
 namespace {
 
 /** Four lanes' state in registers, loaded from and stored to BlockRayWalker's arrays at lane `base`. */

@@ -80,6 +80,13 @@ class BlockRayWalker {
    */
   BlockRayWalker(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count,
                  Lanes lanes = Lanes::Best);
+  /**
+   * As above, and ray i's walk begins where it is at distance cuts[i] (RayBundles): the cells before are
+   * not handed out, the stretches after are the plain walk's. The lanes take the cuts; the scalar walk
+   * walks every ray from the sensor.
+   */
+  BlockRayWalker(const CellGrid& grid, const float sensor[3], const float* ends, const double* cuts,
+                 std::size_t count, Lanes lanes = Lanes::Best);
 
   /** Whether a ray between these cells stays within kReach of `from` on every axis. */
   static bool reaches(const Key& from, const Key& to);
@@ -108,6 +115,8 @@ class BlockRayWalker {
 
   /** Cells of the rays walked to their end: traceSegment's counts, summed. */
   std::uint64_t cellCount() const { return cells_; }
+  /** Of those, the cells before the rays' cuts, passed without a step. */
+  std::uint64_t skippedCount() const { return skipped_; }
 
  private:
   static constexpr int kLanes = 8;
@@ -119,6 +128,17 @@ class BlockRayWalker {
   std::uint64_t word(const TreeCoord& c) const;
   /** Loads the next ray that passes at least one cell into `lane`; false when none is left. */
   bool startRay(int lane);
+  /** Sets up the next kReady rays that pass a cell, each moved to its cut. */
+  void prepare();
+  static constexpr int kReady = 8;
+  /**
+   * Moves each ray to its cut: the walk takes each axis's crossings in order of distance, so at the cut it
+   * has taken exactly those before it, each axis's summed as the walk sums them.
+   */
+  void forward(double (&tmax)[3][kReady], const double (&tdelta)[3][kReady], const double (&cut)[kReady],
+               std::int64_t (&skip)[3][kReady]) const;
+  static void forwardAvx2(double (&tmax)[3][kReady], const double (&tdelta)[3][kReady],
+                          const double (&cut)[kReady], std::int64_t (&skip)[3][kReady]);
   /**
    * Ends a lane's step that the vector test flagged, near or past the end cell or beyond the length:
    * `beyond` and `crossed` (into another block) as the lanes found them.
@@ -134,10 +154,11 @@ class BlockRayWalker {
   const CellGrid& grid_;
   const float* sensor_;
   const float* ends_;
+  const double* cuts_;
   std::size_t count_, next_ray_ = 0;
   Key from_;
   Path path_;
-  std::uint64_t cells_ = 0;
+  std::uint64_t cells_ = 0, skipped_ = 0;
   std::uint32_t origin_[3] = {0, 0, 0};      // tree coordinates of the words' zero, less the bias
   std::uint32_t block_base_[3] = {0, 0, 0};  // origin_ / 4
   std::uint64_t start_ = 0;                  // the sensor cell's word
@@ -157,6 +178,15 @@ class BlockRayWalker {
   alignas(32) std::int64_t live_[kLanes] = {};   // -1 or 0
 
   std::vector<std::uint64_t> out_[2];  // a cell of each stretch, as a word, and its cells
+
+  /** A ray set up for a lane. */
+  struct Ready {
+    std::int64_t cell, end, left, span;
+    std::int64_t inc[3];
+    double tmax[3], tdelta[3], length;
+  };
+  Ready ready_[kReady];
+  int ready_next_ = 0, ready_count_ = 0;
 };
 
 }  // namespace detail

@@ -14,6 +14,7 @@
 #include <pcl_fot/tree/accessor.h>
 
 #include "mapping/block_ray_walker.h"
+#include "mapping/ray_bundles.h"
 #include "mapping/scan_cells.h"
 
 namespace pcl {
@@ -328,9 +329,11 @@ class CellGatherer {
  public:
   explicit CellGatherer(std::size_t rays) : cells_(rays < 1024 ? 1024 : rays), recent_(kRecent) {}
 
-  /** Walks `count` rays, their ends as xyz triples; returns the cells walked. */
-  std::uint64_t walk(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count) {
-    detail::BlockRayWalker walker(grid, sensor, ends, count);
+  /** Walks `count` rays, their ends as xyz triples, each from its cut; counts the cells walked and skipped.
+   */
+  void walk(const CellGrid& grid, const float sensor[3], const float* ends, const double* cuts,
+            std::size_t count) {
+    detail::BlockRayWalker walker(grid, sensor, ends, cuts, count);
     while (const std::size_t n = walker.next()) {
       for (std::size_t i = 0; i < n; ++i) {
         const std::uint64_t key = walker.blockKey(i);
@@ -343,8 +346,24 @@ class CellGatherer {
         cells_.pass(r.index, walker.cells(i));
       }
     }
-    return walker.cellCount();
+    walked_ += walker.cellCount();
+    skipped_ += walker.skippedCount();
   }
+
+  /** Adds cells passed (RayBundles' blocks). */
+  void pass(const std::vector<ScanBlock>& blocks) {
+    std::uint32_t last[3] = {~0u, ~0u, ~0u}, index = 0;
+    for (const ScanBlock& b : blocks) {
+      if (b.at[0] != last[0] || b.at[1] != last[1] || b.at[2] != last[2]) {
+        index = cells_.index(b.at);
+        std::copy(b.at, b.at + 3, last);
+      }
+      cells_.pass(index, b.passed);
+    }
+  }
+
+  std::uint64_t walked() const { return walked_; }
+  std::uint64_t skipped() const { return skipped_; }
 
   detail::ScanCells& cells() { return cells_; }
 
@@ -358,6 +377,7 @@ class CellGatherer {
 
   detail::ScanCells cells_;
   std::vector<Recent> recent_;
+  std::uint64_t walked_ = 0, skipped_ = 0;
 };
 
 /**
@@ -366,24 +386,28 @@ class CellGatherer {
  * update depends only on whether some ray passes it or ends in it, so the cells are the same for any count.
  */
 detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const ScanRays& rays,
-                              std::size_t workers, ScanStats& stats) {
+                              const detail::RayBundles& bundles, std::size_t workers, ScanStats& stats) {
   const std::size_t count = rays.ends.size() / 3, runs = (count + kRaysPerRun - 1) / kRaysPerRun;
   std::vector<std::unique_ptr<CellGatherer>> shares(workers);
-  std::vector<std::uint64_t> walked(workers, 0);
   std::atomic<std::size_t> next_run{0};
   detail::runWorkers(workers, [&](std::size_t w) {
     shares[w] = std::make_unique<CellGatherer>(count / workers);
+    if (w == 0) shares[w]->pass(bundles.blocks);
     for (std::size_t r; (r = next_run.fetch_add(1, std::memory_order_relaxed)) < runs;) {
       const std::size_t begin = r * kRaysPerRun, n = std::min(kRaysPerRun, count - begin);
-      walked[w] += shares[w]->walk(grid, sensor, rays.ends.data() + 3 * begin, n);
+      shares[w]->walk(grid, sensor, rays.ends.data() + 3 * begin,
+                      bundles.cuts.empty() ? nullptr : bundles.cuts.data() + begin, n);
     }
   });
+  for (const auto& share : shares) {
+    stats.ray_cells += share->walked();
+    stats.skipped_cells += share->skipped();
+  }
   detail::ScanCells cells = std::move(shares[0]->cells());
   for (std::size_t w = 1; w < workers; ++w) {
     cells.join(shares[w]->cells());
     shares[w].reset();
   }
-  for (const std::uint64_t n : walked) stats.ray_cells += n;
   for (std::size_t i = 0; i < rays.far.size(); i += 3)
     stats.ray_cells += traceSegment(grid, sensor, &rays.far[i], [&](const Key& k) { cells.pass(k); });
   for (const Key& k : rays.endpoints) cells.hit(k);
@@ -467,12 +491,15 @@ ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, 
   const ScanRays rays = prepareRays(grid, sensor, xyz, count, stride_bytes, options, stats);
   const bool log_odds = options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds;
   const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
-  if (!log_odds && workers == 1 && !options.region) {
+  const detail::RayBundles bundles =
+      detail::bundleRays(grid, sensor, rays.ends.data(), rays.ends.size() / 3, workers);
+  // A binary scan whose rays are walked whole is written as it is walked: no gathering.
+  if (!log_odds && workers == 1 && !options.region && bundles.cuts.empty()) {
     TreeWriter writer(map, options.line_burst, count);
     streamCells(writer, grid, sensor, rays, stats);
     return stats;
   }
-  const detail::ScanCells cells = gatherCells(grid, sensor, rays, workers, stats);
+  const detail::ScanCells cells = gatherCells(grid, sensor, rays, bundles, workers, stats);
   stats.free_cells = applyScan(map, cells.blocks().data(), cells.blocks().size(), options);
   return stats;
 }
@@ -485,7 +512,9 @@ std::vector<ScanBlock> traceScan(const FastOctTree& map, const float sensor[3], 
   s = ScanStats{};
   const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, s);
   const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
-  return gatherCells(map.getGrid(), sensor, rays, workers, s).releaseBlocks();
+  const detail::RayBundles bundles =
+      detail::bundleRays(map.getGrid(), sensor, rays.ends.data(), rays.ends.size() / 3, workers);
+  return gatherCells(map.getGrid(), sensor, rays, bundles, workers, s).releaseBlocks();
 }
 
 std::uint64_t applyScan(FastOctTree& map, const ScanBlock* blocks, std::size_t count,

@@ -59,9 +59,15 @@ struct ScanStats {
   std::uint64_t ray_cells = 0;  ///< cells the rays pass, each a Free write for the grid; endpoints excluded
   /**
    * Distinct cells marked free (passed, no endpoint): ray_cells counts each once per ray. Counted where the
-   * cells are gathered before the tree is written (the log-odds rule, or more than one thread); 0 elsewhere.
+   * cells are gathered before the tree is written (the log-odds rule, more than one thread, or rays in
+   * bundles, see skipped_cells); 0 elsewhere.
    */
   std::uint64_t free_cells = 0;
+  /**
+   * Of ray_cells, those passed without a step: on dense scans, the stretches near the sensor that bundles
+   * of rays certainly pass are marked once for all, and each ray is walked from where its bundle stopped.
+   */
+  std::uint64_t skipped_cells = 0;
 };
 
 /**
