@@ -353,7 +353,8 @@ TEST(RayBundles, ADenseFramesCellsAreThoseOfItsPlainWalks) {
 }
 
 TEST(RayBundles, RaysEveryWayAndOfEveryLengthKeepTheirCells) {
-  // All six faces of the bundles' cube, rays from one cell long to far, a cluster of parallel rays.
+  // All six faces of the bundles' cube, each dense enough at 0.2 m to be swept, rays from one cell long to
+  // far, a cluster of parallel rays.
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f), length(0.01f, 6.0f);
   const float sensor[3] = {0.31f, -0.77f, 1.05f};
@@ -366,7 +367,7 @@ TEST(RayBundles, RaysEveryWayAndOfEveryLengthKeepTheirCells) {
   for (int i = 0; i < 2000; ++i)
     for (float c : {sensor[0] + 4.0f, sensor[1] + 1e-5f * float(i % 40), sensor[2] + 1e-5f * float(i / 40)})
       xyz.push_back(c);
-  expectPlainWalksUnion(xyz, sensor, 0.05, 2, 0.0);
+  expectPlainWalksUnion(xyz, sensor, 0.2, 2, 0.05);
 }
 
 TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {

@@ -20,9 +20,10 @@ namespace detail {
  * marked cells are together exactly the cells of the plain walk.
  *
  * Certainly passed: the directions are binned on the six faces of a cube around the sensor. A layer of
- * cells across a face's axis is swept outwards; a cell of it counts when some ray of that face crosses the
- * layer's middle plane inside the cell by a margin and ends beyond the layer: OctoMap's walk, rounding and
- * all, then visits the cell (its error is a small fraction of the margin). A bundle moves to the next layer
+ * cells across a face's axis is swept outwards; a cell of it counts when some ray of that face crosses one
+ * of three planes of the layer inside the cell by a margin and ends beyond the layer: OctoMap's walk,
+ * rounding and all, then visits the cell (its error is a small fraction of the margin). Faces whose rays
+ * are too sparse for that to pay are left to the walk. A bundle moves to the next layer
  * while every cell its rays can touch there counts and its rays end beyond; its rays' walks begin just
  * short of where it stopped.
  */
