@@ -163,9 +163,8 @@ struct Face {
 struct Bundle {
   double p0 = std::numeric_limits<double>::max(), p1 = -std::numeric_limits<double>::max();
   double q0 = std::numeric_limits<double>::max(), q1 = -std::numeric_limits<double>::max();
-  double deepest = 0.0;  // end depth of its deepest ray
-  double reached = 0.0;  // depth of the far side of its last certain layer
-  bool active = true;
+  double deepest = 0.0;                           // end depth of its deepest ray
+  double reached = 0.0;                           // depth of the far side of its last certain layer
   std::int64_t u0 = 0, u1 = -1, v0 = 0, v1 = -1;  // its cells in the current layer
 };
 
@@ -255,10 +254,7 @@ class FaceSweep {
       std::int64_t v0 = u0, v1 = u1;
       std::size_t kept = 0;
       for (Bundle* b : active) {
-        if (b->deepest < far + margin_) {  // all its rays end here or before
-          b->active = false;
-          continue;
-        }
+        if (b->deepest < far + margin_) continue;  // all its rays end here or before
         b->u0 = cellOf(face_.u, std::min(b->p0 * near, b->p0 * far) - margin_);
         b->u1 = cellOf(face_.u, std::max(b->p1 * near, b->p1 * far) + margin_);
         b->v0 = cellOf(face_.v, std::min(b->q0 * near, b->q0 * far) - margin_);
@@ -299,8 +295,6 @@ class FaceSweep {
         if (certain) {
           b->reached = far;
           active[kept++] = b;
-        } else {
-          b->active = false;
         }
       }
       active.resize(kept);
