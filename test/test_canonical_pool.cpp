@@ -145,6 +145,17 @@ TEST(CanonicalPool, EveryFlawIsNamed) {
   far.root_level = 2;
   far.root_base = {0, 0, 0};
   expectRefused(far, "key range");
+  // A word above the leaves whose octants hold two values: it names one, the cubes' value.
+  FastOctTree::CanonicalPool two;
+  two.words.assign(8, 0);
+  two.words[0] = node::uniform(CellState::Free) | node::kValueFlag;
+  two.values.assign(8, -0.4f);
+  two.values[5] = -0.8f;
+  two.root_level = 3;
+  two.root_base = TreeCoord(Key{0, 0, 0});
+  expectRefused(two, "more than one value");
+  two.values[5] = -0.4f;
+  EXPECT_EQ(FastOctTree::fromCanonicalPool(CellGrid(0.1), two).getUnsettledCount(), 512u);
   // The pool cap.
   EXPECT_THROW(FastOctTree::fromCanonicalPool(CellGrid(0.1), good, 64), MemoryLimitError);
 }

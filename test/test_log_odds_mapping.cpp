@@ -219,7 +219,7 @@ TEST(LogOddsMapping, AnObjectThatMovesAwayIsFreedByEvidenceEqualsOctoMap) {
   EXPECT_FLOAT_EQ(all.getLogOdds(box), SensorModel().hitLogOdds() + 3 * SensorModel().missLogOdds());
 }
 
-TEST(LogOddsMapping, ForEachLogOddsGivesEveryKnownCellOnceWithItsValueAndSettledCubesWhole) {
+TEST(LogOddsMapping, ForEachLogOddsGivesEveryKnownCellOnceWithItsValueAndCubesWhole) {
   const Sequence once = movingObject();
   Sequence scans = once;
   scans.insert(scans.end(), once.begin(), once.end());  // eight scans: the wall and free space settle
@@ -233,12 +233,9 @@ TEST(LogOddsMapping, ForEachLogOddsGivesEveryKnownCellOnceWithItsValueAndSettled
       EXPECT_EQ(map.getCell(k), r.state) << toString(k);
     }
     const bool settled = log_odds == model.clampMinLogOdds() || log_odds == model.clampMaxLogOdds();
-    if (r.level > 0) {
-      EXPECT_TRUE(settled) << "a cube holds one value only where its cells have settled";
-      ++cubes;
-    }
+    cubes += r.level > 0;
     cells += std::uint64_t(1) << (3 * r.level);
-    unsettled += !settled;
+    unsettled += settled ? 0 : std::uint64_t(1) << (3 * r.level);
   });
   EXPECT_EQ(cells, map.getFreeCount() + map.getOccupiedCount());
   EXPECT_EQ(unsettled, map.getUnsettledCount());
@@ -435,6 +432,117 @@ TEST(LogOddsStorage, LeavesOfSeveralValuesTakeBytesWhileThePaletteIsShort) {
   tree.setLogOdds(Key{1, 0, 0}, 0.3f);
   EXPECT_EQ(tree.getValueRowCount(), 0u);
   EXPECT_EQ(tree.getUnsettledCount(), 304u);
+}
+
+TEST(LogOddsStorage, ACubeOfOneValueIsOneWordAtAnyLevelWhateverTheOrderOfWrites) {
+  const float miss = SensorModel().missLogOdds();
+  FastOctTree cube(0.1), by_cells(0.1);
+  cube.setBoxLogOdds(Key{0, 0, 0}, Key{31, 31, 31}, miss);
+  for (int z = 31; z >= 0; --z)  // cell by cell, in the opposite order
+    for (int y = 31; y >= 0; --y)
+      for (int x = 31; x >= 0; --x) by_cells.setLogOdds(Key{x, y, z}, miss);
+  for (const FastOctTree* t : {&cube, &by_cells}) {
+    EXPECT_EQ(t->getBlockCount(), 0u) << "the 32^3 cells fold into the root word";
+    EXPECT_EQ(t->getValueLeafCount(), 1u);
+    EXPECT_EQ(t->getUnsettledCount(), 32768u);
+    EXPECT_EQ(t->getFreeCount(), 32768u);
+  }
+  EXPECT_TRUE(cube == by_cells);
+  EXPECT_EQ(cube.canonicalPool().words, by_cells.canonicalPool().words);
+  int regions = 0;
+  cube.forEachLogOdds([&](const Region& r, float v) {
+    EXPECT_EQ(r.level, 5u);
+    EXPECT_EQ(bits(v), bits(miss));
+    ++regions;
+  });
+  EXPECT_EQ(regions, 1);
+
+  // A cell that moves splits the cube down to its leaf; setting it back folds it again.
+  const FastOctTree whole = cube;
+  cube.updateLogOdds(Key{3, 7, 9}, 0.85f);
+  EXPECT_EQ(cube.getBlockCount(), 4u);
+  EXPECT_EQ(bits(cube.getLogOdds(Key{3, 7, 9})), bits(miss + 0.85f));
+  EXPECT_EQ(bits(cube.getLogOdds(Key{2, 7, 9})), bits(miss));
+  EXPECT_EQ(bits(cube.getLogOdds(Key{0, 31, 0})), bits(miss));
+  EXPECT_EQ(cube.getUnsettledCount(), 32768u);
+  cube.setLogOdds(Key{3, 7, 9}, miss);
+  EXPECT_TRUE(cube == whole);
+  EXPECT_EQ(cube.getBlockCount(), 0u);
+  // A settled cell inside splits it as well; part of the cube erased leaves the rest of one value.
+  cube.setCell(Key{16, 16, 16}, CellState::Occupied);
+  EXPECT_EQ(cube.getUnsettledCount(), 32767u);
+  cube.setBoxLogOdds(Key{0, 0, 0}, Key{31, 31, 15}, FastOctTree::kUnknownValue);
+  EXPECT_EQ(cube.getFreeCount(), 16383u);
+  cube.setLogOdds(Key{16, 16, 16}, miss);
+  EXPECT_EQ(cube.getBlockCount(), 0u) << "the known half is four octants of the root word";
+  EXPECT_EQ(bits(cube.getLogOdds(Key{31, 31, 31})), bits(miss));
+  EXPECT_THROW(cube.setBoxLogOdds(Key{0, 0, 0}, Key{1, 1, 1}, INFINITY), std::invalid_argument);
+
+  // A cell far away grows the root, and erased leaves the cube an octant of a larger word: the same map.
+  FastOctTree grown = whole;
+  grown.setLogOdds(Key{100, 0, 0}, 0.3f);
+  grown.setCell(Key{100, 0, 0}, CellState::Unknown);
+  EXPECT_TRUE(grown == whole);
+  EXPECT_EQ(grown.canonicalPool().words, whole.canonicalPool().words);
+  EXPECT_EQ(io::encodeOt(grown), io::encodeOt(whole));
+
+  // Merged, the cube stays one word; settled, it is its binary twin.
+  FastOctTree twice = whole;
+  twice.merge(whole);
+  EXPECT_EQ(twice.getBlockCount(), 0u);
+  EXPECT_EQ(bits(twice.getLogOdds(Key{5, 5, 5})), bits(miss + miss));
+  twice.toMaxLikelihood();
+  FastOctTree binary(0.1);
+  binary.setBox(Key{0, 0, 0}, Key{31, 31, 31}, CellState::Free);
+  EXPECT_TRUE(twice == binary);
+  twice.shrinkToFit();
+  EXPECT_EQ(twice.getMemoryBytes(), binary.getMemoryBytes());
+
+  // Files keep the cube whole; a .fot pool that spells it out as leaves (as files did before) folds.
+  for (const std::string& bytes : {io::encodeFot(whole), io::encodeOt(whole)}) {
+    const FastOctTree back = bytes[0] == '#' ? io::decodeOt(bytes.data(), bytes.size())
+                                             : io::decodeFot(bytes.data(), bytes.size());
+    EXPECT_TRUE(back == whole);
+    EXPECT_EQ(back.getBlockCount(), 0u);
+  }
+  FastOctTree::CanonicalPool leaves = whole.canonicalPool();
+  leaves.words = {node::reference(1), 0, 0, 0, 0, 0, 0, 0};
+  leaves.values.clear();
+  for (unsigned o = 0; o < 8; ++o) {
+    leaves.words.push_back(node::uniform(CellState::Free) | node::kValueFlag);
+    leaves.values.insert(leaves.values.end(), 8, miss);
+  }
+  leaves.root_level = 2;
+  leaves.root_base = TreeCoord(Key{0, 0, 0});
+  const FastOctTree folded = FastOctTree::fromCanonicalPool(whole.getGrid(), leaves);
+  EXPECT_EQ(folded.getBlockCount(), 0u);
+  EXPECT_EQ(folded.getValueLeafCount(), 1u);
+  EXPECT_EQ(bits(folded.getLogOdds(Key{3, 3, 3})), bits(miss));
+}
+
+TEST(LogOddsFiles, AnOtWhoseRootIsOneLeafBetweenTheClampsIsOneWord) {
+  // OctoMap prunes a cube of one value to a leaf at any depth: here its root, 2^48 cells.
+  std::ostringstream root_leaf;
+  root_leaf << "# Octomap OcTree file\nid OcTree\nsize 1\nres 0.1\ndata\n";
+  const float value = 0.5f;
+  root_leaf.write(reinterpret_cast<const char*>(&value), 4);
+  root_leaf.put(0);
+  const std::string bytes = root_leaf.str();
+  std::istringstream in(bytes);
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
+  auto* theirs = dynamic_cast<octomap::OcTree*>(read.get());
+  ASSERT_NE(theirs, nullptr) << "OctoMap reads it";
+  ASSERT_EQ(theirs->getNumLeafNodes(), 1u);
+  const FastOctTree ours = io::decodeOt(bytes.data(), bytes.size());
+  EXPECT_EQ(ours.getBlockCount(), 0u);
+  EXPECT_EQ(ours.getOccupiedCount(), std::uint64_t(1) << 48);
+  EXPECT_EQ(ours.getUnsettledCount(), std::uint64_t(1) << 48);
+  for (const Key& k : {Key{-32768, -32768, -32768}, Key{32767, 32767, 32767}, Key{5, -9, 77}})
+    EXPECT_EQ(bits(ours.getLogOdds(k)), bits(value)) << toString(k);
+  EXPECT_TRUE(std::isnan(ours.getLogOdds(Key{32768, 0, 0})));
+  const std::string again = io::encodeOt(ours);
+  EXPECT_NE(again.find("\nsize 1\n"), std::string::npos);
+  EXPECT_EQ(again.substr(again.size() - 5), bytes.substr(bytes.size() - 5));
 }
 
 TEST(LogOddsMapping, SearchPsiAndExportsReadTheThresholdedMap) {

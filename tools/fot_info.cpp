@@ -59,7 +59,7 @@ void describe(const std::string& path, std::size_t max_bytes) {
   const std::uint64_t unsettled = tree.getUnsettledCount();
   print_info("  settled cells   %llu (at a clamp)\n",
              (unsigned long long)(tree.getOccupiedCount() + tree.getFreeCount() - unsettled));
-  print_info("  unsettled cells %llu (log-odds between the clamps, in %zu leaves)\n",
+  print_info("  unsettled cells %llu (log-odds between the clamps, in %zu words)\n",
              (unsigned long long)unsettled, tree.getValueLeafCount());
   print_info("  node words      %zu in %zu blocks\n", tree.getNodeCount(), tree.getBlockCount());
   print_info("  bytes           %zu in memory\n", tree.getMemoryBytes());

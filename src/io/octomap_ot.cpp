@@ -8,8 +8,6 @@
 #include <utility>
 #include <vector>
 
-#include <pcl_fot/tree/accessor.h>
-
 #include <pcl_fot/io/file_io.h>
 
 #include "io/octomap_format.h"
@@ -60,25 +58,11 @@ class OtReader {
   FormatError fail(const std::string& what) const { return FormatError(what_file_ + ": " + what); }
 
  private:
-  /** A leaf's cells: one settled cube, or each cell with the value, which a pruned leaf may repeat. */
+  /** A leaf's cells: a voxel, or a pruned cube of one value, kept whole. */
   void leaf(const TreeCoord& corner, unsigned depth, float log_odds) {
-    const SensorModel& m = staging_.getSensorModel();
-    const unsigned level = kDepth - depth;
-    const std::int32_t side = std::int32_t(1) << level;
+    const std::int32_t last = (std::int32_t(1) << (kDepth - depth)) - 1;
     const Key lo = corner.key();
-    if (m.settled(log_odds)) {
-      staging_.setBox(lo, Key{lo.x + side - 1, lo.y + side - 1, lo.z + side - 1},
-                      m.occupied(log_odds) ? CellState::Occupied : CellState::Free);
-      return;
-    }
-    const double bytes = std::ldexp(sizeof(float), int(3 * level));
-    if (bytes > double(staging_.getMaxMemoryBytes()))
-      throw MemoryLimitError("pcl::fot::io: a pruned leaf between the clamps spans 2^" +
-                             std::to_string(3 * level) + " cells, whose values pass the memory cap");
-    Accessor cells(staging_);
-    for (std::int32_t z = 0; z < side; ++z)
-      for (std::int32_t y = 0; y < side; ++y)
-        for (std::int32_t x = 0; x < side; ++x) cells.setLogOdds(Key{lo.x + x, lo.y + y, lo.z + z}, log_odds);
+    staging_.setBoxLogOdds(lo, Key{lo.x + last, lo.y + last, lo.z + last}, log_odds);
   }
 
   const unsigned char* at_;
@@ -95,16 +79,18 @@ class OtWriter {
  public:
   explicit OtWriter(const FastOctTree& tree) : tree_(tree) {}
 
-  /** The node n, whose word is at pool offset `at` (for a leaf word), and its subtree; returns its value. */
+  /** The node n, whose word is at pool offset `at` (for a word of the pool), and its subtree; returns its
+   * value. */
   float node(const NodeView& n, std::size_t at) {
     const std::size_t record = put(0.0f);
     if (n.isUniform()) return patch(record, tree_.settledValue(n.uniformState()), 0);
+    if (node::isValueUniform(n.word)) return patch(record, tree_.wordValue(n.word, at, 0), 0);  // as OctoMap
     float max = -std::numeric_limits<float>::infinity();
     unsigned mask = 0;
     for (unsigned o = 0; o < 8; ++o) {
       float v;
-      if (n.level == 1) {  // a leaf word's cells
-        v = tree_.leafValue(at, o);
+      if (n.isBitmap()) {  // a leaf word's cells, or uniform cubes: pruned leaves
+        v = tree_.wordValue(n.word, at, o);
         if (std::isnan(v)) continue;
         patch(put(v), v, 0);
       } else {

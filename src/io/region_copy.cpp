@@ -38,12 +38,11 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
                         std::size_t max_pool_bytes) {
   struct Box {
     Key lo, hi;
-    CellState state;
-    float log_odds;  // a lone cell's, when it is not settled
+    float log_odds;
   };
   std::vector<Box> boxes;
   double cubes = 0;
-  from.forEachRegion([&](const Region& r) {
+  from.forEachLogOdds([&](const Region& r, float v) {
     const std::int64_t last = (std::int64_t(1) << r.level) - 1;
     const std::int64_t lo[3] = {r.min_key.x + shift[0], r.min_key.y + shift[1], r.min_key.z + shift[2]};
     for (std::int64_t c : lo)
@@ -53,8 +52,7 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
     const Key l{std::int32_t(lo[0]), std::int32_t(lo[1]), std::int32_t(lo[2])};
     const Key h{std::int32_t(lo[0] + last), std::int32_t(lo[1] + last), std::int32_t(lo[2] + last)};
     cubes += boxCubes(l, h);
-    const float v = r.level == 0 ? from.getLogOdds(r.min_key) : from.settledValue(r.state);
-    boxes.push_back(Box{l, h, r.state, v});
+    boxes.push_back(Box{l, h, v});
   });
   // A word per cube: copies of shifted cubes measured 0.57 words per cube, in a pool that grows by doubling.
   // Beyond the cap, refuse at once rather than fill memory up to it.
@@ -72,12 +70,7 @@ FastOctTree shiftedCopy(const FastOctTree& from, const CellGrid& grid, const std
   to.setSensorModel(from.getSensorModel());
   to.setUpdateRule(from.getUpdateRule());
   to.setMaxMemoryBytes(max_pool_bytes);
-  for (const Box& b : boxes) {
-    if (from.getSensorModel().settled(b.log_odds))
-      to.setBox(b.lo, b.hi, b.state);
-    else
-      to.setLogOdds(b.lo, b.log_odds);
-  }
+  for (const Box& b : boxes) to.setBoxLogOdds(b.lo, b.hi, b.log_odds);
   to.setMaxMemoryBytes(std::numeric_limits<std::size_t>::max());
   return to;
 }

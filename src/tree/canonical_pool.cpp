@@ -2,6 +2,7 @@
 #include <pcl_fot/tree/fast_oct_tree.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 
 namespace pcl {
@@ -9,21 +10,21 @@ namespace fot {
 namespace {
 
 /**
- * Appends the subtree of the word at pool offset `at` in pre-order, and the values of its flagged leaves;
- * references are renumbered to the blocks as they are appended.
+ * Appends the subtree of the word w, at pool offset `at` (FastOctTree::wordValue), in pre-order, and the
+ * values of its flagged words; references are renumbered to the blocks as they are appended.
  */
-NodeWord appendSubtree(const FastOctTree& tree, std::size_t at, FastOctTree::CanonicalPool& out) {
-  const NodeWord w = tree.words()[at];
+NodeWord appendSubtree(const FastOctTree& tree, std::size_t at, NodeWord w, FastOctTree::CanonicalPool& out) {
   if (node::isBitmap(w)) {
     if (node::hasValues(w))
-      for (unsigned o = 0; o < 8; ++o) out.values.push_back(tree.leafValue(at, o));
+      for (unsigned o = 0; o < 8; ++o) out.values.push_back(tree.wordValue(w, at, o));
     return w & ~node::kPaletteMask;  // palette indices follow the order of updates: the pool holds values
   }
   const std::size_t first = out.words.size();
   const std::uint32_t block = std::uint32_t(first / 8);
   out.words.resize(first + 8);
   for (unsigned o = 0; o < 8; ++o) {
-    const NodeWord child = appendSubtree(tree, node::childOffset(w, o), out);
+    const std::size_t child_at = node::childOffset(w, o);
+    const NodeWord child = appendSubtree(tree, child_at, tree.words()[child_at], out);
     out.words[first + o] = child;
   }
   return node::reference(block);
@@ -92,9 +93,11 @@ class PoolCheck {
     }
   }
 
-  /** A flagged leaf's 8 values: NaN where the state is unknown, else finite and thresholded to the state. */
+  /**
+   * A flagged word's 8 values: NaN where the state is unknown, else finite and thresholded to the state,
+   * and one value in every known octant above the leaves.
+   */
   void leafValues(const NodeView& n) {
-    if (n.level != 1) fail("a word above the leaves is flagged as carrying values");
     if (values_.size() - next_value_ < 8) fail("the values end before the last flagged leaf");
     bool settled = true;
     for (unsigned o = 0; o < 8; ++o) {
@@ -107,10 +110,14 @@ class PoolCheck {
       if ((model_.occupied(v) ? CellState::Occupied : CellState::Free) != s)
         fail("a flagged leaf's state is not its value thresholded");
       settled = settled && model_.settled(v);
+      if (n.level > 1 && std::memcmp(&v, &values_[next_value_ + __builtin_ctz(known(n.word))], sizeof v) != 0)
+        fail("a flagged word above the leaves holds more than one value");
     }
     if (settled) fail("a flagged leaf has no cell between the clamps");
     next_value_ += 8;
   }
+
+  static std::uint32_t known(NodeWord w) { return ~node::octantMask(w, CellState::Unknown) & 0xFFu; }
 
   const std::vector<NodeWord>& words_;
   const std::vector<float>& values_;
@@ -146,7 +153,7 @@ FastOctTree::CanonicalPool FastOctTree::canonicalPool() const {
   pool.values.reserve(8 * value_leaves_);
   pool.words[0] = node::isBitmap(root.word) && !node::hasValues(root.word)
                       ? root.word
-                      : appendSubtree(*this, offsetOf(root), pool);
+                      : appendSubtree(*this, offsetOf(root), root.word, pool);
   return pool;
 }
 
@@ -185,12 +192,15 @@ FastOctTree FastOctTree::fromCanonicalPool(const CellGrid& grid, CanonicalPool p
   FastOctTree tree(grid);
   tree.model_ = pool.model;
   tree.words_ = std::move(pool.words);
-  tree.installValues(std::move(pool.values));
   tree.root_level_ = level;
   tree.base_ = pool.root_base;
+  tree.installValues(std::move(pool.values));
   tree.live_blocks_ = tree.words_.size() / 8 - 1;
   tree.counts_[std::size_t(CellState::Free)] = check.count(CellState::Free);
   tree.counts_[std::size_t(CellState::Occupied)] = check.count(CellState::Occupied);
+  // Files written before cubes of one value folded spell them out as leaves: fold them now.
+  tree.foldSubtree(0);
+  tree.compactPool();
   return tree;
 }
 

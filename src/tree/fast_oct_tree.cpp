@@ -79,18 +79,25 @@ InsertStats FastOctTree::insertPoints(const float* xyz, std::size_t count, std::
   return stats;
 }
 
-void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
-  if (!isValidKey(lo)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", lo);
-  if (!isValidKey(hi)) throwKeyOutOfRange("pcl::fot::FastOctTree::setBox", hi);
+namespace {
+
+/** Checks a box for setBox and setBoxLogOdds. */
+void checkBox(const char* where, const Key& lo, const Key& hi) {
+  if (!isValidKey(lo)) throwKeyOutOfRange(where, lo);
+  if (!isValidKey(hi)) throwKeyOutOfRange(where, hi);
   if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z)
-    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box " + toString(lo) + " to " +
-                                toString(hi) + " is empty");
+    throw std::invalid_argument(std::string(where) + ": the box " + toString(lo) + " to " + toString(hi) +
+                                " is empty");
   const std::uint64_t sx = std::uint64_t(hi.x - lo.x) + 1, sy = std::uint64_t(hi.y - lo.y) + 1,
                       sz = std::uint64_t(hi.z - lo.z) + 1;
   if ((unsigned __int128)(sx * sy) * sz >= (unsigned __int128)1 << 60)
-    throw std::invalid_argument("pcl::fot::FastOctTree::setBox: the box holds 2^60 cells or more");
-  const TreeCoord l(lo), h(hi);
-  // Split the smallest aligned cube holding the box down to the cubes inside it.
+    throw std::invalid_argument(std::string(where) + ": the box holds 2^60 cells or more");
+}
+
+/** Splits the smallest aligned cube holding the box [l, h] down to the cubes inside it: write(corner, level).
+ */
+template <typename Write>
+void forEachCubeInBox(const TreeCoord& l, const TreeCoord& h, Write&& write) {
   auto split = [&](auto& self, const TreeCoord& c, unsigned level) -> void {
     const std::uint64_t last = (std::uint64_t(1) << level) - 1;
     bool inside = true;
@@ -99,7 +106,7 @@ void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
       inside = inside && c[a] >= l[a] && c[a] + last <= h[a];
     }
     if (inside) {
-      setCube(c, level, state);
+      write(c, level);
       return;
     }
     for (unsigned o = 0; o < 8; ++o) self(self, c.child(o, level - 1), level - 1);
@@ -108,11 +115,32 @@ void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
   split(split, l.corner(top), top);
 }
 
+}  // namespace
+
+void FastOctTree::setBox(const Key& lo, const Key& hi, CellState state) {
+  checkBox("pcl::fot::FastOctTree::setBox", lo, hi);
+  forEachCubeInBox(TreeCoord(lo), TreeCoord(hi),
+                   [&](const TreeCoord& c, unsigned level) { setCube(c, level, state); });
+}
+
+void FastOctTree::setBoxLogOdds(const Key& lo, const Key& hi, float log_odds) {
+  checkBox("pcl::fot::FastOctTree::setBoxLogOdds", lo, hi);
+  if (std::isinf(log_odds))
+    throw std::invalid_argument("pcl::fot::FastOctTree::setBoxLogOdds: the log-odds is infinite");
+  forEachCubeInBox(TreeCoord(lo), TreeCoord(hi),
+                   [&](const TreeCoord& c, unsigned level) { setCubeLogOdds(c, level, log_odds); });
+}
+
 void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
   if (level == 0) {
     Accessor(*this, false).setValidCell(c.key(), state);
     return;
   }
+  writeCube(c, level, node::uniform(state));
+}
+
+void FastOctTree::writeCube(const TreeCoord& c, unsigned level, NodeWord cube) {
+  const CellState state = node::state(cube, 0);
   const std::uint32_t x = c[0], y = c[1], z = c[2];
   const std::uint32_t apart = (x ^ base_[0]) | (y ^ base_[1]) | (z ^ base_[2]);
   const bool cube_in_root = level <= root_level_ && (apart >> root_level_) == 0;
@@ -135,11 +163,15 @@ void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
     }
   }
   const std::uint64_t cells = node::cellsIn(1, level);
+  const auto add = [&](NodeWord w) {
+    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    value_leaves_ += node::hasValues(w);
+  };
   ++version_;
   if (level == root_level_) {  // the cube is the root
     releaseSubtree(0, root_level_);
-    words_[0] = node::uniform(state);
-    if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+    words_[0] = cube;
+    add(cube);
     return;
   }
   std::size_t path[kMaxLevel + 1];
@@ -147,32 +179,34 @@ void FastOctTree::setCube(const TreeCoord& c, unsigned level, CellState state) {
   unsigned l = root_level_;
   for (; l > level + 1 && !node::isBitmap(words_[path[l]]); --l)
     path[l - 1] = node::childOffset(words_[path[l]], c.octant(l));
-  if (l > level + 1) {  // from this bitmap word down to the cube's parent, each level takes a block
-    if (node::state(words_[path[l]], c.octant(l)) == state) return;  // inside such a cube
-    reserveBlocks(l - level - 1);
+  constexpr NodeWord kValueBits = node::kValueFlag | node::kPaletteMask;
+  const NodeWord top = words_[path[l]];
+  if (node::isBitmap(top)) {
+    // From this bitmap word down to the cube's parent each level takes a block, and so does the parent
+    // when it holds other values than the cube.
+    const NodeWord octant = node::octantWord(top, c.octant(l));
+    if (octant == cube) return;  // inside such a cube
+    const NodeWord parent = l > level + 1 ? octant : top;
+    reserveBlocks(l - level - 1 + ((parent & kValueBits) != (cube & kValueBits) ? 1 : 0));
   }
-  for (; l > level + 1; --l) {
-    const NodeWord w = words_[path[l]];
-    const std::size_t first = std::size_t(allocBlock()) * 8;
-    for (unsigned i = 0; i < 8; ++i) words_[first + i] = node::uniform(node::state(w, i));
-    words_[path[l]] = node::reference(std::uint32_t(first / 8));
-    path[l - 1] = first + c.octant(l);
-  }
+  for (; l > level + 1; --l) path[l - 1] = splitWord(path[l]) + c.octant(l);
   const unsigned o = c.octant(level + 1);
   const NodeWord parent = words_[path[level + 1]];
-  if (node::isBitmap(parent)) {  // the cube is one of its octants
+  if (node::isBitmap(parent) && (parent & kValueBits) == (cube & kValueBits)) {  // the cube is an octant
     const CellState old = node::state(parent, o);
-    if (old == state) return;
     if (old != CellState::Unknown) counts_[std::size_t(old)] -= cells;
     if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
     words_[path[level + 1]] = node::withState(parent, o, state);
-    if (node::isUniform(words_[path[level + 1]])) collapseFrom(path, level + 1);
+    const NodeWord now = words_[path[level + 1]];
+    if (node::isUniform(now) || node::isValueUniform(now)) collapseFrom(path, level + 1);
     return;
   }
-  path[level] = node::childOffset(parent, o);
+  // A parent holding other values than the cube's: its octants become words, the cube one of them.
+  const std::size_t first = node::isBitmap(parent) ? splitWord(path[level + 1]) : node::childBase(parent);
+  path[level] = first + o;
   releaseSubtree(path[level], level);
-  words_[path[level]] = node::uniform(state);
-  if (state != CellState::Unknown) counts_[std::size_t(state)] += cells;
+  words_[path[level]] = cube;
+  add(cube);
   collapseFrom(path, level);
 }
 
@@ -279,15 +313,17 @@ void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z,
   // Growth takes a block per level, but a uniform root folds into its parent's bitmap for free. The write
   // then builds the path from the new root down to the cube's parent, below the new root's block if there
   // is one. Reserving both first keeps a refused write from leaving the root grown.
-  const std::size_t growth = target - root_level_ - (node::isUniform(words_[0]) ? 1 : 0);
+  const bool folds = node::isUniform(words_[0]) || node::isValueUniform(words_[0]);
+  const std::size_t growth = target - root_level_ - (folds ? 1 : 0);
   const std::size_t path = target > level + 1 ? target - level - (growth > 0 ? 2 : 1) : 0;
   reserveBlocks(growth + path);
   while (root_level_ < target) {
     const NodeWord root = words_[0];
     const unsigned octant = base_.octant(root_level_ + 1);
-    if (node::isUniform(root)) {
-      // A uniform root folds straight into one octant of its parent: no block needed.
-      words_[0] = node::withState(node::uniform(CellState::Unknown), octant, node::uniformState(root));
+    if (node::isUniform(root) || node::isValueUniform(root)) {
+      // A uniform root folds straight into one octant of its parent, its value with it: no block needed.
+      words_[0] = node::withState(node::uniform(CellState::Unknown), octant, node::state(root, 0)) |
+                  (root & (node::kValueFlag | node::kPaletteMask));
     } else {
       const std::uint32_t block = allocBlock();
       const std::size_t first = std::size_t(block) * 8;
@@ -305,32 +341,64 @@ void FastOctTree::expandTo(std::size_t* path, unsigned level, std::uint32_t x, s
                            std::uint32_t z) {
   reserveBlocks(level - 1);
   ++version_;
-  NodeWord w = words_[path[level]];
-  while (level > 1) {
-    const std::uint32_t block = allocBlock();
-    const std::size_t first = std::size_t(block) * 8;
-    for (unsigned o = 0; o < 8; ++o) words_[first + o] = node::uniform(node::state(w, o));
-    words_[path[level]] = node::reference(block);
-    const std::size_t at = first + tree_coord::octant(x, y, z, level);
-    path[--level] = at;
-    w = words_[at];
+  for (; level > 1; --level) path[level - 1] = splitWord(path[level]) + tree_coord::octant(x, y, z, level);
+}
+
+std::size_t FastOctTree::splitWord(std::size_t at) {
+  const NodeWord w = words_[at];
+  const std::uint32_t block = allocBlock();
+  const std::size_t first = std::size_t(block) * 8;
+  for (unsigned o = 0; o < 8; ++o) words_[first + o] = node::octantWord(w, o);
+  if (node::hasValues(w)) value_leaves_ += node::popcount(~node::octantMask(w, CellState::Unknown)) - 1;
+  words_[at] = node::reference(block);
+  return first;
+}
+
+NodeWord FastOctTree::foldedBlock(std::size_t first) const {
+  constexpr NodeWord kValueBits = node::kValueFlag | node::kPaletteMask;
+  NodeWord folded = node::kBitmapTag, value = 0;
+  bool settled = false;
+  for (unsigned o = 0; o < 8; ++o) {
+    const NodeWord w = words_[first + o];
+    if (node::isValueUniform(w)) {
+      if (value != 0 && (w & kValueBits) != value) return 0;
+      value = w & kValueBits;
+    } else if (node::isUniform(w)) {
+      settled = settled || node::uniformState(w) != CellState::Unknown;
+    } else {
+      return 0;
+    }
+    folded = node::withState(folded, o, node::state(w, 0));
   }
+  // A flagged word's known octants all hold its one value: settled cubes do not join it.
+  return settled && value != 0 ? 0 : folded | value;
+}
+
+void FastOctTree::foldSubtree(std::size_t at) {
+  const NodeWord w = words_[at];
+  if (node::isBitmap(w)) return;
+  for (unsigned o = 0; o < 8; ++o) foldSubtree(node::childOffset(w, o));
+  const NodeWord folded = foldedBlock(node::childBase(w));
+  if (folded == 0) return;
+  for (unsigned o = 0; o < 8; ++o) value_leaves_ -= node::hasValues(words_[node::childOffset(w, o)]);
+  value_leaves_ += node::hasValues(folded);
+  freeBlock(node::block(w));
+  words_[at] = folded;
+  ++version_;
 }
 
 unsigned FastOctTree::collapseFrom(const std::size_t* path, unsigned level) {
   while (level < root_level_) {
     const std::size_t first = path[level] & ~std::size_t(7);
-    NodeWord parent = node::kBitmapTag;
-    for (unsigned o = 0; o < 8; ++o) {
-      const NodeWord w = words_[first + o];
-      if (!node::isUniform(w)) return level;
-      parent |= NodeWord(node::uniformState(w)) << (node::kStateShift + 2 * o);
-    }
+    const NodeWord parent = foldedBlock(first);
+    if (parent == 0) return level;
+    for (unsigned o = 0; o < 8; ++o) value_leaves_ -= node::hasValues(words_[first + o]);
+    value_leaves_ += node::hasValues(parent);
     words_[path[level + 1]] = parent;
     freeBlock(std::uint32_t(first / 8));
     ++version_;
     ++level;
-    if (!node::isUniform(parent)) return level;
+    if (!node::isUniform(parent) && !node::isValueUniform(parent)) return level;
   }
   return level;
 }
@@ -367,7 +435,9 @@ NodeView FastOctTree::contentRoot() const {
       only = o;
     }
     if (only == 8) return n;  // empty
-    n = n.child(words_.data(), only);
+    // A flagged word's octant is a cube of its value: a word of its own.
+    const NodeWord w = n.isBitmap() ? node::octantWord(n.word, only) : words_[n.childOffset(only)];
+    n = NodeView{w, n.level - 1, n.corner.child(only, n.level - 1)};
   }
   return n;
 }
@@ -381,7 +451,7 @@ bool sameSubtree(const FastOctTree& a, std::size_t at_a, NodeWord wa, const Fast
     if ((wa & ~node::kPaletteMask) != (wb & ~node::kPaletteMask)) return false;
     if (!node::hasValues(wa)) return true;
     for (unsigned o = 0; o < 8; ++o) {
-      const float va = a.leafValue(at_a, o), vb = b.leafValue(at_b, o);
+      const float va = a.wordValue(wa, at_a, o), vb = b.wordValue(wb, at_b, o);
       if (std::memcmp(&va, &vb, sizeof va) != 0) return false;
     }
     return true;

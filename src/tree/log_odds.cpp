@@ -49,19 +49,19 @@ void FastOctTree::setLogOdds(const Key& key, float log_odds) {
 
 std::uint64_t FastOctTree::getUnsettledCount() const {
   std::uint64_t n = 0;
-  auto walk = [&](auto& self, std::size_t at) -> void {
+  auto walk = [&](auto& self, std::size_t at, unsigned level) -> void {
     const NodeWord w = words_[at];
     if (node::isBitmap(w)) {
       if (!node::hasValues(w)) return;
       for (unsigned o = 0; o < 8; ++o) {
         const float v = leafValue(at, o);
-        n += !std::isnan(v) && !model_.settled(v);
+        if (!std::isnan(v) && !model_.settled(v)) n += node::cellsIn(1, level - 1);
       }
       return;
     }
-    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
+    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o), level - 1);
   };
-  walk(walk, 0);
+  walk(walk, 0, root_level_);
   return n;
 }
 
@@ -103,20 +103,27 @@ void FastOctTree::installValues(std::vector<float> values) {
   values_.releaseRows();
   if (values.empty()) return;
   std::size_t next = 0;
-  auto walk = [&](auto& self, std::size_t at) -> void {
+  auto walk = [&](auto& self, std::size_t at, unsigned level) -> void {
     const NodeWord w = words_[at];
     if (node::isBitmap(w)) {
       if (!node::hasValues(w)) return;
       float v[8];
       std::memcpy(v, &values[8 * next++], sizeof v);
       const NodeWord states = w & ~node::kValueFlag;  // no values yet
-      words_[at] = values_.store(at, states, states, v, pool());
+      if (level == 1) {
+        words_[at] = values_.store(at, states, states, v, pool());
+      } else {  // cubes of one value (checked), which only the palette holds
+        const unsigned known = unsigned(__builtin_ctz(~node::octantMask(w, CellState::Unknown)));
+        words_[at] = values_.named(states, v[known]);
+        if (words_[at] == 0)
+          throw MemoryLimitError("pcl::fot::FastOctTree: the palette of 16382 values is full");
+      }
       ++value_leaves_;
       return;
     }
-    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o));
+    for (unsigned o = 0; o < 8; ++o) self(self, node::childOffset(w, o), level - 1);
   };
-  walk(walk, 0);
+  walk(walk, 0, root_level_);
 }
 
 unsigned FastOctTree::commitLeaf(const std::size_t* path, const float (&v)[8]) {
@@ -169,29 +176,50 @@ void FastOctTree::updateCube(const TreeCoord& c, unsigned level, float update) {
     Accessor(*this, false).updateCell(c.key(), update);
     return;
   }
-  // The cube's cells as this map holds them: one uniform state, or structure to split along.
-  NodeView n = root();
-  const std::uint32_t apart = (c[0] ^ n.corner[0]) | (c[1] ^ n.corner[1]) | (c[2] ^ n.corner[2]);
-  CellState uniform = CellState::Unknown;
+  // The cube's cells as this map holds them: one value, or structure to split along.
+  const std::uint32_t apart = (c[0] ^ base_[0]) | (c[1] ^ base_[1]) | (c[2] ^ base_[2]);
+  float value = kUnknownValue;
   bool is_uniform = true;
-  if (empty()) {
-    is_uniform = true;
-  } else if (level <= root_level_ && (apart >> root_level_) == 0) {
-    while (n.level > level && !n.isUniform()) n = n.child(words_.data(), c.octant(n.level));
-    is_uniform = n.isUniform();
-    uniform = n.uniformState();
-  } else {
+  if (!empty() && level <= root_level_ && (apart >> root_level_) == 0) {
+    std::size_t at = 0;
+    unsigned l = root_level_;
+    for (; l > level && !node::isBitmap(words_[at]); --l) at = node::childOffset(words_[at], c.octant(l));
+    const NodeWord w = words_[at];
+    if (l > level) {
+      value = leafValue(at, c.octant(l));  // inside one octant of a bitmap
+    } else {
+      is_uniform = node::isUniform(w) || node::isValueUniform(w);
+      value = leafValue(at, 0);
+    }
+  } else if (!empty()) {
     is_uniform = (apart >> level) != 0;  // disjoint from the root (unknown), or holding it (split)
   }
   if (is_uniform) {
-    float after = settledValue(uniform);
-    model_.updateNode(after, update);
-    if (model_.settled(after)) {
-      setCube(c, level, model_.occupied(after) ? CellState::Occupied : CellState::Free);
-      return;
-    }
+    if (model_.updateNode(value, update)) setCubeLogOdds(c, level, value);
+    return;
   }
   for (unsigned o = 0; o < 8; ++o) updateCube(c.child(o, level - 1), level - 1, update);
+}
+
+void FastOctTree::setCubeLogOdds(const TreeCoord& c, unsigned level, float log_odds) {
+  if (std::isnan(log_odds) || model_.settled(log_odds)) {
+    setCube(c, level,
+            std::isnan(log_odds) ? CellState::Unknown
+                                 : (model_.occupied(log_odds) ? CellState::Occupied : CellState::Free));
+    return;
+  }
+  if (level == 0) {
+    Accessor(*this, false).setLogOdds(c.key(), log_odds);
+    return;
+  }
+  const CellState s = model_.occupied(log_odds) ? CellState::Occupied : CellState::Free;
+  const NodeWord cube = values_.named(node::uniform(s), log_odds);
+  if (cube != 0) {
+    writeCube(c, level, cube);
+    return;
+  }
+  for (unsigned o = 0; o < 8; ++o)
+    setCubeLogOdds(c.child(o, level - 1), level - 1, log_odds);  // palette full
 }
 
 void FastOctTree::merge(const FastOctTree& other) {
@@ -216,7 +244,7 @@ void FastOctTree::merge(const FastOctTree& other) {
   other.forEachLogOdds([&](const Region& r, float log_odds) {
     if (r.level > 0) {
       flush();
-      updateCube(TreeCoord(r.min_key), r.level, log_odds);  // a settled cube: whole cubes at once
+      updateCube(TreeCoord(r.min_key), r.level, log_odds);  // a cube of one value: whole cubes at once
       return;
     }
     const TreeCoord c(r.min_key), l(leaf);

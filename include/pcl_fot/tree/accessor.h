@@ -83,10 +83,16 @@ class BasicAccessor {
       writeLeaf(updated);
       return 0;
     }
-    if (node::state(w, c.octant(bottom_)) == state) return line_burst_ ? bottom_ - 1 : 0;
+    if (node::octantWord(w, c.octant(bottom_)) == node::uniform(state)) return line_burst_ ? bottom_ - 1 : 0;
     tree_->expandTo(path_, bottom_, x, y, z);
     bottom_ = 1;
-    writeLeaf(node::withStates(tree_->words()[path_[1]], mask, state));
+    const NodeWord leaf = tree_->words()[path_[1]];
+    if (node::hasValues(leaf)) {  // a cube of one value, split down to this leaf
+      bottom_ = tree_->setLeafStates(path_, mask, state);
+      version_ = tree_->structureVersion();
+      return 0;
+    }
+    writeLeaf(node::withStates(leaf, mask, state));
     return 0;
   }
 
@@ -112,7 +118,8 @@ class BasicAccessor {
     const NodeWord w = reach(x, y, z);
     if (bottom_ > 1) {
       const CellState s = node::state(w, c.octant(bottom_));
-      if ((s == CellState::Free && hit == 0) || (s == CellState::Occupied && miss == 0))
+      const bool settled = !node::hasValues(w);  // else a cube of one value between the clamps
+      if (settled && ((s == CellState::Free && hit == 0) || (s == CellState::Occupied && miss == 0)))
         return line_burst_ ? bottom_ - 1 : 0;
       expand(x, y, z);
     } else if (!node::hasValues(w) && (node::octantMask(w, CellState::Free) & miss) == miss &&
@@ -141,13 +148,13 @@ class BasicAccessor {
     static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
     if (!isValidKey(key)) throwKeyOutOfRange("pcl::fot::Accessor::updateCell", key);
     const TreeCoord c(key);
-    const NodeWord w = reach(c[0], c[1], c[2]);
+    reach(c[0], c[1], c[2]);
     if (bottom_ > 1) {
-      // A settled cube stays whole unless an update can move it.
-      const float settled = tree_->settledValue(node::state(w, c.octant(bottom_)));
+      // A cube of one value stays whole unless an update can move it.
+      const float before = tree_->leafValue(path_[bottom_], c.octant(bottom_));
       bool moves = false;
       for (std::uint32_t m = mask; m != 0; m &= m - 1) {
-        float v = settled;
+        float v = before;
         moves |= tree_->getSensorModel().updateNode(v, update[__builtin_ctz(m)]);
       }
       if (!moves) return;

@@ -46,10 +46,11 @@ class BasicAccessor;
  * new keys in any direction.
  *
  * Every cell also has a log-odds, as in OctoMap (SensorModel). A cell at a clamp is settled and is its
- * state alone: free at the lower clamp, occupied at the upper. A leaf with a cell between the clamps keeps
- * its 8 values in a block beside the pool and is flagged (node::kValueFlag); its states are the values
- * thresholded, so every reader of states sees the thresholded map. Binary writes (setCell, the paper's
- * rule) settle the cells they write.
+ * state alone: free at the lower clamp, occupied at the upper. A leaf with a cell between the clamps is
+ * flagged (node::kValueFlag) and keeps its values beside the pool (LeafValues); cubes whose cells share one
+ * value between the clamps fold into one flagged word at any level, as OctoMap prunes equal values. States
+ * are the values thresholded, so every reader of states sees the thresholded map. Binary writes (setCell,
+ * the paper's rule) settle the cells they write.
  *
  * Repeated access should go through an Accessor (LineBurstAccess, see accessor.h). Const members are
  * safe to call from many threads at once; writes need exclusive access.
@@ -119,6 +120,12 @@ class FastOctTree {
    * counts are 64-bit). MemoryLimitError past the pool cap leaves the cubes written until then.
    */
   void setBox(const Key& lo, const Key& hi, CellState state);
+  /**
+   * Sets every cell of the key box [lo, hi] to `log_odds` (NaN: unknown), whole cubes at once: a cube of
+   * one value between the clamps is one word, as a settled one is (forEachLogOdds visits such cubes).
+   * Throws as setBox, and std::invalid_argument for an infinite value.
+   */
+  void setBoxLogOdds(const Key& lo, const Key& hi, float log_odds);
 
   /** Writes every valid key; invalid keys are skipped and counted. */
   InsertStats insertKeys(const Key* keys, std::size_t count, CellState state = CellState::Occupied,
@@ -131,8 +138,8 @@ class FastOctTree {
                            CellState state = CellState::Occupied, bool line_burst = true);
 
   /**
-   * Visits every maximal uniform known cube (a uniform word) in Morton order: visit(const Region&), which
-   * may return false to stop the walk.
+   * Visits every maximal uniform known cube (a uniform word, or a cube of one value) in Morton order:
+   * visit(const Region&), which may return false to stop the walk.
    */
   template <typename Visitor>
   void forEachRegion(Visitor&& visit) const;
@@ -147,9 +154,9 @@ class FastOctTree {
   void forEachCell(CellState state, Visitor&& visit) const;
   /**
    * Visits every known cell with its log-odds in Morton order, without a lookup per cell: visit(const
-   * Region&, float), which may return false to stop the walk. A settled cube comes whole, with its clamp; a
-   * cell between the clamps comes alone (level 0), with its float. Exporting or comparing a map reads it this
-   * way.
+   * Region&, float), which may return false to stop the walk. A cube of one value comes whole: a settled
+   * cube with its clamp, a folded cube between the clamps with its float; other cells come alone (level 0).
+   * Exporting or comparing a map reads it this way.
    */
   template <typename Visitor>
   void forEachLogOdds(Visitor&& visit) const;
@@ -168,7 +175,7 @@ class FastOctTree {
    * none: its word names the value in a palette of up to 16382 values (LeafValues).
    */
   std::size_t getValueRowCount() const { return values_.rowCount(); }
-  /** Leaves whose cells carry values (a cell between the clamps), by palette or by row. */
+  /** Words whose cells carry values (a cell between the clamps), by palette or by row, at any level. */
   std::size_t getValueLeafCount() const { return value_leaves_; }
   /** Every byte the tree holds: the object, the pool and the values, free blocks and rows included. */
   std::size_t getMemoryBytes() const { return sizeof(*this) + words_.capacity() * 4 + values_.bytes(); }
@@ -232,8 +239,9 @@ class FastOctTree {
   NodeView root() const { return NodeView{words_[0], root_level_, base_}; }
   const NodeWord* words() const { return words_.data(); }
   /**
-   * The smallest node holding every known cell: the root, descended while only one octant holds anything.
-   * Canonical form holds below the root, so two trees with the same cells reach the same node.
+   * The smallest node holding every known cell: the root, descended while only one octant holds anything
+   * (into a bitmap's octant as node::octantWord gives it). Canonical form holds below the root, so two trees
+   * with the same cells reach the same node.
    */
   NodeView contentRoot() const;
   std::size_t poolWords() const { return words_.size(); }
@@ -241,11 +249,15 @@ class FastOctTree {
    * down the node's corner. */
   std::size_t offsetOf(const NodeView& n) const;
   /**
-   * The log-odds of octant o of the bitmap word at pool offset `at`: a cell's for a leaf, a whole settled
-   * octant's above.
+   * The log-odds of octant o of the bitmap word at pool offset `at`: a cell's for a leaf, a whole octant's
+   * above.
    */
-  float leafValue(std::size_t at, unsigned o) const {
-    const NodeWord w = words_[at];
+  float leafValue(std::size_t at, unsigned o) const { return wordValue(words_[at], at, o); }
+  /**
+   * As leafValue, for the bitmap word w of a node view: contentRoot() may be a cube of one value that is an
+   * octant of its parent's word, whose offset offsetOf() then gives (only a leaf's row needs the offset).
+   */
+  float wordValue(NodeWord w, std::size_t at, unsigned o) const {
     if (!node::hasValues(w) || node::state(w, o) == CellState::Unknown)
       return settledValue(node::state(w, o));
     return values_.value(w, at, o);
@@ -305,10 +317,30 @@ class FastOctTree {
   void installValues(std::vector<float> values);
   /** toMaxLikelihood below the word at pool offset `at`; returns the word, folded where it became uniform. */
   NodeWord settleSubtree(std::size_t at);
-  /** The word at path[level] became uniform: folds full blocks upward. Returns the new bottom level. */
+  /**
+   * The word at path[level] became uniform or a cube of one value: folds blocks upward (foldedBlock).
+   * Returns the new bottom level.
+   */
   unsigned collapseFrom(const std::size_t* path, unsigned level);
   /** Writes the aligned cube of 2^level cells per axis whose corner is c. */
   void setCube(const TreeCoord& c, unsigned level, CellState state);
+  /** setCube with a log-odds; a cube between the clamps the palette cannot name is written cell by cell. */
+  void setCubeLogOdds(const TreeCoord& c, unsigned level, float log_odds);
+  /**
+   * Makes the cube at c, of level >= 1, the word `cube`: uniform, or a cube of one value (a flagged word
+   * whose octants all hold it).
+   */
+  void writeCube(const TreeCoord& c, unsigned level, NodeWord cube);
+  /**
+   * Replaces the bitmap word at pool offset `at`, above level 1, by a new block of its octants as words
+   * (node::octantWord); room for the block must be reserved. Returns the block's first offset.
+   */
+  std::size_t splitWord(std::size_t at);
+  /** The word the block at pool offset `first` folds into: all uniform, or cubes of one value and
+   * unknown ones; 0 when it does not fold. */
+  NodeWord foldedBlock(std::size_t first) const;
+  /** Folds, below the word at pool offset `at`, every block that folds (a pool read from a file). */
+  void foldSubtree(std::size_t at);
 
   /** Frees the blocks below the word at pool offset `at`, of level `level`, and takes its cells out of the
    * counts. */
@@ -339,7 +371,7 @@ class FastOctTree {
   SensorModel model_;
   UpdateRule rule_ = UpdateRule::Binary;
   LeafValues values_;             // the flagged leaves' log-odds
-  std::size_t value_leaves_ = 0;  // flagged leaves
+  std::size_t value_leaves_ = 0;  // flagged words
 };
 
 inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated) {
@@ -350,14 +382,14 @@ inline unsigned FastOctTree::writeLeaf(const std::size_t* path, NodeWord updated
   }
   value_leaves_ += std::size_t(node::hasValues(updated)) - std::size_t(node::hasValues(leaf));
   leaf = updated;
-  return node::isUniform(updated) ? collapseFrom(path, 1) : 1;
+  return node::isUniform(updated) || node::isValueUniform(updated) ? collapseFrom(path, 1) : 1;
 }
 
 template <typename Overlaps, typename Visitor>
 bool FastOctTree::walkRegions(const NodeView& n, Overlaps& overlaps, Visitor& visit) const {
   const Key corner = n.corner.key();
   if (!overlaps(corner, n.level)) return true;
-  if (n.isUniform()) {
+  if (n.isUniform() || node::isValueUniform(n.word)) {  // a cube of one state
     if (n.uniformState() == CellState::Unknown) return true;
     const Region region{corner, n.level, n.uniformState()};
     if constexpr (std::is_same<decltype(visit(region)), bool>::value) {
@@ -414,9 +446,9 @@ bool FastOctTree::walkLogOdds(std::size_t at, unsigned level, const TreeCoord& c
     }
   };
   const NodeWord w = words_[at];
-  if (node::isUniform(w)) {
+  if (node::isUniform(w) || node::isValueUniform(w)) {
     const CellState s = node::uniformState(w);
-    return s == CellState::Unknown || call(Region{corner.key(), level, s}, settledValue(s));
+    return s == CellState::Unknown || call(Region{corner.key(), level, s}, leafValue(at, 0));
   }
   for (unsigned o = 0; o < 8; ++o) {
     const TreeCoord c = corner.child(o, level - 1);

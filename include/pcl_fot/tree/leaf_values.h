@@ -21,11 +21,12 @@ class MemoryLimitError : public std::length_error {
 };
 
 /**
- * The log-odds of a FastOctTree's flagged leaves, the level-1 words whose cells lie between the clamps
- * (node_word.h). A leaf whose known cells share one value names it in the palette (up to 16382 values, in
- * the word); any other flagged leaf has a row of 8 values aside: 8 palette indices (bytes) when the
- * palette's first 255 values hold them, else 8 floats. A row is found through an index parallel to the
- * tree's pool, by the leaf word's offset, which exists only while some leaf has a row.
+ * The log-odds of a FastOctTree's flagged words, whose known cells lie between the clamps (node_word.h).
+ * A word whose known cells share one value names it in the palette (up to 16382 values, in the word): a
+ * leaf, or a word above the leaves whose octants are cubes of that value. Any other flagged leaf has a row of
+ * 8 values aside: 8 palette indices (bytes) when the palette's first 255 values hold them, else 8 floats. A
+ * row is found through an index parallel to the tree's pool, by the leaf word's offset, which exists only
+ * while some leaf has a row.
  *
  * The tree owns the words and calls these with a leaf's word and offset; it tells the index when its pool
  * grows, shrinks or moves blocks.
@@ -52,6 +53,14 @@ class LeafValues {
    * MemoryLimitError, before anything changes, if a new row would take the pool beyond its cap.
    */
   NodeWord store(std::size_t at, NodeWord old, NodeWord states, const float (&v)[8], const Pool& pool);
+  /**
+   * `states` flagged as holding `value`, unsettled, in every known octant: a word above the leaves whose
+   * octants are cubes of one value (node::octantWord). 0 when the palette is full.
+   */
+  NodeWord named(NodeWord states, float value) {
+    const std::uint32_t p = paletteIndex(value);
+    return p == 0 ? 0 : states | node::kValueFlag | (p << node::kPaletteShift);
+  }
   /** Frees the row of the leaf word `w` at `at`, if it has one. */
   void release(NodeWord w, std::size_t at);
   /** Frees every row; the palette stays. */

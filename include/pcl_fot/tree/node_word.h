@@ -13,12 +13,13 @@ namespace fot {
  *
  * Tag bit 0 set: a bitmap word. Bits 16..31 hold the states of the node's 8 octants, 2 bits each
  * (octant i at bits 16+2i), and bits 2..15 are zero. At level 1 the octants are voxels: the paper's
- * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a level-1 word whose
+ * FOT leaf. Above level 1 each octant is a uniform region. Bit 1 (kValueFlag) marks a word whose known
  * cells carry log-odds between the clamps (see LeafValues): bits 2..15 then hold the index of their one
- * value in the tree's palette, when all its known cells hold one value; kByteRow when the tree keeps the
- * 8 cells' palette indices in a row of bytes aside; or 0 when it keeps their 8 floats in a row aside. Its
- * states are the values thresholded, so a reader of states needs no values. Tag bit 0 clear: a reference, the
- * index of the pool block that holds the 8 child words.
+ * value in the tree's palette, when all its known cells hold one value; or, at level 1 only, kByteRow when
+ * the tree keeps the 8 cells' palette indices in a row of bytes aside, or 0 when it keeps their 8 floats in
+ * a row aside. Above level 1 a flagged word's known octants are cubes of its one value, as OctoMap prunes
+ * equal values. Its states are the values thresholded, so a reader of states needs no values. Tag bit 0
+ * clear: a reference, the index of the pool block that holds the 8 child words.
  */
 using NodeWord = std::uint32_t;
 static_assert(sizeof(NodeWord) == 4, "a FastOctTree node is exactly one 32-bit word");
@@ -84,6 +85,13 @@ constexpr bool hasValueRow(NodeWord w) {
   return hasValues(w) && (palette(w) == 0 || palette(w) == kByteRow);
 }
 
+/** A flagged word whose 8 octants hold one known state and one palette value: a cube of that value. */
+constexpr bool isValueUniform(NodeWord w) {
+  const NodeWord states = w >> kStateShift;
+  const std::uint32_t p = palette(w);
+  return hasValues(w) && p != 0 && p != kByteRow && (states & 3u) != 0 && states == (states & 3u) * 0x5555u;
+}
+
 /** Bits set in an octant mask. Without -mpopcnt the builtin is a libgcc call, so count in registers. */
 constexpr unsigned popcount(std::uint32_t mask) {
   std::uint32_t x = mask & 0xFFu;
@@ -106,6 +114,15 @@ constexpr NodeWord uniform(CellState s) {
 constexpr bool isUniform(NodeWord w) {
   const NodeWord states = w >> kStateShift;
   return (w & 0xFFFFu) == kBitmapTag && states == (states & 3u) * 0x5555u;
+}
+
+/**
+ * Octant o of the bitmap word w above level 1 as a word one level down: uniform, or, in a flagged word, a
+ * cube of its one value.
+ */
+constexpr NodeWord octantWord(NodeWord w, unsigned o) {
+  const CellState s = state(w, o);
+  return uniform(s) | (hasValues(w) && s != CellState::Unknown ? w & (kValueFlag | kPaletteMask) : 0u);
 }
 
 /** The state of a uniform bitmap. */
