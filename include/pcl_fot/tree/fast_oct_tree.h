@@ -214,7 +214,7 @@ class FastOctTree {
     unsigned root_level = 1;
     TreeCoord root_base;
     std::vector<NodeWord> words;
-    /** The 8 log-odds of each flagged leaf, in pre-order; NaN for unknown cells. */
+    /** The 8 log-odds of each flagged word, in pre-order; NaN for unknown cells. */
     std::vector<float> values;
     SensorModel model;
   };
@@ -224,10 +224,11 @@ class FastOctTree {
    * The tree a canonical pool describes, checked in full before it is built: the root's level and
    * alignment, block 0's padding, every reference (to the next block in pre-order, never from level 1, no
    * block left over), every bitmap (spare bits clear, no invalid state), canonical form (no block of 8
-   * uniform words, a minimal root), every known cell within the key range, every flagged leaf's values
+   * uniform words, a minimal root), every known cell within the key range, every flagged word's values
    * (NaN exactly where the state is unknown, finite and thresholded to the state elsewhere, one unsettled
-   * at least), and the pool's size against max_bytes. Throws std::invalid_argument naming the first
-   * violation.
+   * at least, one value above the leaves), and the pool's size against max_bytes. Throws
+   * std::invalid_argument naming the first violation. Blocks of cubes of one value, which pools written
+   * before such cubes folded spell out, are folded.
    */
   static FastOctTree fromCanonicalPool(const CellGrid& grid, CanonicalPool pool,
                                        std::size_t max_bytes = std::numeric_limits<std::size_t>::max());
@@ -313,7 +314,7 @@ class FastOctTree {
   void leafValues(std::size_t at, float (&v)[8]) const;
   /** The pool as LeafValues needs it for the memory cap. */
   LeafValues::Pool pool() const { return {words_.size(), words_.capacity(), max_bytes_}; }
-  /** Gives the flagged leaves, in pre-order, the values of `values` (a canonical pool's). */
+  /** Gives the flagged words, in pre-order, the values of `values` (a canonical pool's). */
   void installValues(std::vector<float> values);
   /** toMaxLikelihood below the word at pool offset `at`; returns the word, folded where it became uniform. */
   NodeWord settleSubtree(std::size_t at);

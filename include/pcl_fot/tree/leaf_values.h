@@ -38,13 +38,13 @@ class LeafValues {
     std::size_t words, capacity, max_bytes;
   };
 
-  /** The value of known octant o of the flagged leaf word `w` at pool offset `at`. */
+  /** The value of known octant o of the flagged word `w` at pool offset `at`. */
   float value(NodeWord w, std::size_t at, unsigned o) const {
     const std::uint32_t p = node::palette(w);
     if (p == 0) return float_rows_.at(row_of_[at])[o];
     return palette_[p == node::kByteRow ? byte_rows_.at(row_of_[at])[o] : p];
   }
-  /** All 8 values of the flagged leaf word `w` at `at`; NaN for its unknown cells. */
+  /** All 8 values of the flagged word `w` at `at`; NaN for its unknown cells. */
   void values(NodeWord w, std::size_t at, float (&v)[8]) const;
 
   /**

@@ -76,7 +76,7 @@ constexpr NodeWord withStates(NodeWord w, std::uint32_t mask, CellState s) {
   return (w & ~field) | ((pairs * NodeWord(s)) << kStateShift);
 }
 
-/** A flagged leaf's palette index; 0 when its values are in a row of floats. */
+/** A flagged word's palette index; 0 when its values are in a row of floats. */
 constexpr std::uint32_t palette(NodeWord w) {
   return (w & kPaletteMask) >> kPaletteShift;
 }
