@@ -81,6 +81,8 @@ InsertStats FastOctTree::insertPoints(const float* xyz, std::size_t count, std::
 
 namespace {
 
+constexpr NodeWord kValueBits = node::kValueFlag | node::kPaletteMask;  // a flagged word's value
+
 /** Checks a box for setBox and setBoxLogOdds. */
 void checkBox(const char* where, const Key& lo, const Key& hi) {
   if (!isValidKey(lo)) throwKeyOutOfRange(where, lo);
@@ -179,7 +181,6 @@ void FastOctTree::writeCube(const TreeCoord& c, unsigned level, NodeWord cube) {
   unsigned l = root_level_;
   for (; l > level + 1 && !node::isBitmap(words_[path[l]]); --l)
     path[l - 1] = node::childOffset(words_[path[l]], c.octant(l));
-  constexpr NodeWord kValueBits = node::kValueFlag | node::kPaletteMask;
   const NodeWord top = words_[path[l]];
   if (node::isBitmap(top)) {
     // From this bitmap word down to the cube's parent each level takes a block, and so does the parent
@@ -323,7 +324,7 @@ void FastOctTree::growToCover(std::uint32_t x, std::uint32_t y, std::uint32_t z,
     if (node::isUniform(root) || node::isValueUniform(root)) {
       // A uniform root folds straight into one octant of its parent, its value with it: no block needed.
       words_[0] = node::withState(node::uniform(CellState::Unknown), octant, node::state(root, 0)) |
-                  (root & (node::kValueFlag | node::kPaletteMask));
+                  (root & kValueBits);
     } else {
       const std::uint32_t block = allocBlock();
       const std::size_t first = std::size_t(block) * 8;
@@ -355,7 +356,6 @@ std::size_t FastOctTree::splitWord(std::size_t at) {
 }
 
 NodeWord FastOctTree::foldedBlock(std::size_t first) const {
-  constexpr NodeWord kValueBits = node::kValueFlag | node::kPaletteMask;
   NodeWord folded = node::kBitmapTag, value = 0;
   bool settled = false;
   for (unsigned o = 0; o < 8; ++o) {

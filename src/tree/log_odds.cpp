@@ -202,17 +202,17 @@ void FastOctTree::updateCube(const TreeCoord& c, unsigned level, float update) {
 }
 
 void FastOctTree::setCubeLogOdds(const TreeCoord& c, unsigned level, float log_odds) {
-  if (std::isnan(log_odds) || model_.settled(log_odds)) {
-    setCube(c, level,
-            std::isnan(log_odds) ? CellState::Unknown
-                                 : (model_.occupied(log_odds) ? CellState::Occupied : CellState::Free));
+  const CellState s = std::isnan(log_odds)
+                          ? CellState::Unknown
+                          : (model_.occupied(log_odds) ? CellState::Occupied : CellState::Free);
+  if (s == CellState::Unknown || model_.settled(log_odds)) {
+    setCube(c, level, s);
     return;
   }
   if (level == 0) {
     Accessor(*this, false).setLogOdds(c.key(), log_odds);
     return;
   }
-  const CellState s = model_.occupied(log_odds) ? CellState::Occupied : CellState::Free;
   const NodeWord cube = values_.named(node::uniform(s), log_odds);
   if (cube != 0) {
     writeCube(c, level, cube);
