@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -368,6 +370,38 @@ TEST(RayBundles, RaysEveryWayAndOfEveryLengthKeepTheirCells) {
     for (float c : {sensor[0] + 4.0f, sensor[1] + 1e-5f * float(i % 40), sensor[2] + 1e-5f * float(i / 40)})
       xyz.push_back(c);
   expectPlainWalksUnion(xyz, sensor, 0.2, 2, 0.05);
+}
+
+TEST(ScanInsertion, BuffersKeptForTheThreadsNextScanCarryNothingOver) {
+  // insertRays keeps its buffers for the calling thread's next scan, whatever map that goes into. Scans of
+  // two maps of different grids, interleaved on one thread (a large scan, then one small enough that the
+  // buffers are let go), give each map what scans on fresh threads give it.
+  const float a[3] = {0.013f, -0.027f, 0.0049f}, b[3] = {0.41f, 0.12f, -0.23f};
+  const std::vector<float> large = depthFrame(a, 400, 300), small = depthFrame(b, 80, 60);
+  for (unsigned threads : {1u, 2u}) {
+    const auto insert = [threads](FastOctTree& map, const float* sensor, const std::vector<float>& xyz) {
+      ScanOptions options;
+      options.threads = threads;
+      insertRays(map, sensor, xyz.data(), xyz.size() / 3, 3 * sizeof(float), options);
+    };
+    const auto fresh = [&](FastOctTree& map, const float* sensor, const std::vector<float>& xyz) {
+      std::thread([&] { insert(map, sensor, xyz); }).join();
+    };
+    FastOctTree fine(0.05), coarse(0.1), fine_fresh(0.05), coarse_fresh(0.1);
+    for (FastOctTree* map : {&fine, &coarse, &fine_fresh, &coarse_fresh})
+      map->setUpdateRule(UpdateRule::LogOdds);
+    insert(fine, a, large), insert(coarse, b, small), insert(fine, b, small), insert(coarse, a, large);
+    fresh(fine_fresh, a, large), fresh(fine_fresh, b, small), fresh(coarse_fresh, b, small);
+    fresh(coarse_fresh, a, large);
+    for (const auto& [kept, alone] : {std::pair<FastOctTree*, FastOctTree*>{&fine, &fine_fresh},
+                                      std::pair<FastOctTree*, FastOctTree*>{&coarse, &coarse_fresh}}) {
+      const FastOctTree::CanonicalPool pk = kept->canonicalPool(), pa = alone->canonicalPool();
+      EXPECT_GT(kept->getUnsettledCount(), 0u);
+      EXPECT_EQ(pk.words, pa.words) << threads << " threads";
+      ASSERT_EQ(pk.values.size(), pa.values.size());
+      EXPECT_EQ(std::memcmp(pk.values.data(), pa.values.data(), pk.values.size() * sizeof(float)), 0);
+    }
+  }
 }
 
 TEST(ScanInsertion, RaysBeyondTheWalkersReachStillFreeEveryCell) {

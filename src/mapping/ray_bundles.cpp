@@ -41,9 +41,11 @@ constexpr std::size_t kLayerCellsPerRay = 64;
  */
 class EndDepths {
  public:
-  EndDepths(double p0, double q0, double width, std::size_t nx, std::size_t ny)
-      : p0_(p0), q0_(q0), width_(width), inv_width_(1.0 / width) {
-    levels_.push_back(Level{nx, ny, std::vector<float>(nx * ny, -1.0f), 1.0});
+  /** Starts anew over nx × ny fine bins of `width` from (p0, q0), no ray in them; keeps the buffers. */
+  void reset(double p0, double q0, double width, std::size_t nx, std::size_t ny) {
+    p0_ = p0, q0_ = q0, width_ = width, inv_width_ = 1.0 / width;
+    used_ = 0;
+    push(nx, ny, 1.0);
   }
 
   void add(double p, double q, double depth) {
@@ -60,16 +62,16 @@ class EndDepths {
   double binWidth() const { return width_; }
 
   void build() {
-    while (levels_.back().nx > 1 || levels_.back().ny > 1) {
-      const Level& f = levels_.back();
-      Level c{(f.nx + 1) / 2, (f.ny + 1) / 2, {}, 0.5 * f.scale};
-      c.depth.assign(c.nx * c.ny, -1.0f);
+    while (levels_[used_ - 1].nx > 1 || levels_[used_ - 1].ny > 1) {
+      const std::size_t nx = levels_[used_ - 1].nx, ny = levels_[used_ - 1].ny;
+      push((nx + 1) / 2, (ny + 1) / 2, 0.5 * levels_[used_ - 1].scale);
+      const Level& f = levels_[used_ - 2];
+      Level& c = levels_[used_ - 1];
       for (std::size_t y = 0; y < f.ny; ++y)
         for (std::size_t x = 0; x < f.nx; ++x) {
           float& d = c.depth[(y / 2) * c.nx + x / 2];
           d = std::max(d, f.depth[y * f.nx + x]);
         }
-      levels_.push_back(std::move(c));
     }
   }
 
@@ -90,7 +92,7 @@ class EndDepths {
     std::uint64_t bits;
     const double half = 0.5 * span;
     std::memcpy(&bits, &half, sizeof bits);
-    const unsigned level = std::min(unsigned(bits >> 52) - 1023u, unsigned(levels_.size()) - 1);
+    const unsigned level = std::min(unsigned(bits >> 52) - 1023u, unsigned(used_) - 1);
     const Level& l = levels_[level];
     const double scale = l.scale;
     const std::size_t x0 = ceilIndex(xa * scale), x1 = std::min(std::size_t(xb * scale), l.nx);
@@ -103,17 +105,25 @@ class EndDepths {
 
  private:
   struct Level {
-    std::size_t nx, ny;
+    std::size_t nx = 0, ny = 0;
     std::vector<float> depth;
-    double scale;  // its bins per fine bin
+    double scale = 1.0;  // its bins per fine bin
   };
   static std::size_t ceilIndex(double x) {
     const std::size_t i = std::size_t(x);
     return i + std::size_t(double(i) < x);
   }
+  /** Takes the next level, its bins empty; a level of an earlier scan lends its buffer. */
+  void push(std::size_t nx, std::size_t ny, double scale) {
+    if (used_ == levels_.size()) levels_.emplace_back();
+    Level& l = levels_[used_++];
+    l.nx = nx, l.ny = ny, l.scale = scale;
+    l.depth.assign(nx * ny, -1.0f);
+  }
 
-  double p0_, q0_, width_, inv_width_;
-  std::vector<Level> levels_;
+  double p0_ = 0.0, q0_ = 0.0, width_ = 1.0, inv_width_ = 1.0;
+  std::vector<Level> levels_;  // the first used_ are this face's
+  std::size_t used_ = 0;
 };
 
 /** The axis of a direction's largest component: its face is that axis's, on the side it points to. */
@@ -152,11 +162,23 @@ struct FaceRay {
   std::uint32_t ray;
 };
 
-/** The rays whose direction's largest component is `axis`, pointing `sign`. */
+/** Rays of a face that one thread set up, in the rays' order, and the box of their tangent coordinates. */
+struct FaceRays {
+  std::vector<FaceRay> rays;
+  double p0 = 0.0, p1 = 0.0, q0 = 0.0, q1 = 0.0;
+};
+
+/** The rays whose direction's largest component is `axis`, pointing `sign`: a part a thread. */
 struct Face {
   unsigned axis, u, v;
   int sign;
-  std::vector<FaceRay> rays;
+  std::vector<FaceRays> parts;
+
+  std::size_t size() const {
+    std::size_t n = 0;
+    for (const FaceRays& p : parts) n += p.rays.size();
+    return n;
+  }
 };
 
 /** A bundle: rays of nearby directions, the box of their tangent coordinates, and how far it got. */
@@ -168,67 +190,112 @@ struct Bundle {
   std::int64_t u0 = 0, u1 = -1, v0 = 0, v1 = -1;  // its cells in the current layer
 };
 
+}  // namespace
+
+/** What the bundles of a scan take, kept for the next. */
+struct RayBundler::Buffers {
+  /** A thread's band of bundles: their layer's cells and the cells they mark. A cache line of its own. */
+  struct alignas(64) Band {
+    std::vector<Bundle*> bundles;
+    std::vector<std::uint8_t> state;
+    std::vector<ScanBlock> marked;
+  };
+
+  RayBundles out;
+  Face faces[6];
+  EndDepths ends;
+  std::vector<std::uint32_t> of;  // per ray of the face, its bundle
+  std::vector<Bundle> bundles;
+  std::vector<Bundle*> active;
+  std::vector<Band> bands;
+};
+
+namespace {
+
 class FaceSweep {
  public:
-  FaceSweep(const CellGrid& grid, const Key& from, const float origin[3], const Face& face, RayBundles& out)
+  FaceSweep(const CellGrid& grid, const Key& from, const float origin[3], const Face& face,
+            RayBundler::Buffers& buffers)
       : res_(grid.resolution()),
         inv_res_(1.0 / grid.resolution()),
         margin_(kMargin * grid.resolution()),
+        rays_(face.size()),
         face_(face),
-        out_(out) {
+        b_(buffers) {
     const std::int32_t key[3] = {from.x, from.y, from.z};
     for (int a = 0; a < 3; ++a) origin_[a] = origin[a], from_[a] = key[a];
   }
 
   /** Sweeps the face's bundles on `workers` threads, each taking a band of them. */
   void run(std::size_t workers) {
-    const std::vector<FaceRay>& rays = face_.rays;
-    double p0 = rays[0].p, p1 = p0, q0 = rays[0].q, q1 = q0;
-    for (const FaceRay& r : rays) {
-      p0 = std::min(p0, r.p), p1 = std::max(p1, r.p);
-      q0 = std::min(q0, r.q), q1 = std::max(q1, r.q);
-    }
+    double p0 = std::numeric_limits<double>::max(), p1 = -p0, q0 = p0, q1 = -p0;
+    for (const FaceRays& part : face_.parts)
+      if (!part.rays.empty()) {
+        p0 = std::min(p0, part.p0), p1 = std::max(p1, part.p1);
+        q0 = std::min(q0, part.q0), q1 = std::max(q1, part.q1);
+      }
     // About four fine bins a ray over the rays' box, and no more than 2n bins along a side.
-    const double n = double(rays.size());
+    const double n = double(rays_);
     const double fine = std::max({0.5 * std::sqrt((p1 - p0) * (q1 - q0) / n),
                                   std::max(p1 - p0, q1 - q0) / (2 * n), std::ldexp(1.0, -30)});
-    EndDepths ends(p0, q0, fine, std::size_t((p1 - p0) / fine) + 1, std::size_t((q1 - q0) / fine) + 1);
-    for (const FaceRay& r : rays) ends.add(r.p, r.q, r.depth);
-    ends.build();
-
+    const std::size_t nx = std::size_t((p1 - p0) / fine) + 1, ny = std::size_t((q1 - q0) / fine) + 1;
+    EndDepths& ends = b_.ends;
+    ends.reset(p0, q0, fine, nx, ny);
     const double wide = kBundleBins * fine;
     const std::size_t bx = std::size_t((p1 - p0) / wide) + 1, by = std::size_t((q1 - q0) / wide) + 1;
-    std::vector<std::uint32_t> of(rays.size());
-    std::vector<Bundle> bundles(bx * by);
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const FaceRay& r = rays[i];
-      const std::size_t x = std::min(std::size_t((r.p - p0) / wide), bx - 1);
-      const std::size_t y = std::min(std::size_t((r.q - q0) / wide), by - 1);
-      Bundle& b = bundles[of[i] = std::uint32_t(y * bx + x)];
-      b.p0 = std::min(b.p0, r.p), b.p1 = std::max(b.p1, r.p);
-      b.q0 = std::min(b.q0, r.q), b.q1 = std::max(b.q1, r.q);
-      b.deepest = std::max(b.deepest, r.depth);
-    }
-    std::vector<Bundle*> active;
-    for (Bundle& b : bundles)
+    b_.of.resize(rays_);
+    b_.bundles.assign(bx * by, Bundle{});
+    // Each thread reads every ray and bins those of its rows of fine bins and of bundles: no two write one.
+    const std::size_t threads = std::min(workers, by);
+    runWorkers(threads, [&](std::size_t w) {
+      const std::size_t fine_lo = w * ny / threads, fine_hi = (w + 1) * ny / threads;
+      const std::size_t wide_lo = w * by / threads, wide_hi = (w + 1) * by / threads;
+      std::size_t i = 0;
+      for (const FaceRays& part : face_.parts)
+        for (const FaceRay& r : part.rays) {
+          const std::size_t fy = std::min(std::size_t((r.q - q0) / fine), ny - 1);
+          if (fy >= fine_lo && fy < fine_hi) ends.add(r.p, r.q, r.depth);
+          const std::size_t y = std::min(std::size_t((r.q - q0) / wide), by - 1);
+          if (y >= wide_lo && y < wide_hi) {
+            const std::size_t x = std::min(std::size_t((r.p - p0) / wide), bx - 1);
+            Bundle& b = b_.bundles[b_.of[i] = std::uint32_t(y * bx + x)];
+            b.p0 = std::min(b.p0, r.p), b.p1 = std::max(b.p1, r.p);
+            b.q0 = std::min(b.q0, r.q), b.q1 = std::max(b.q1, r.q);
+            b.deepest = std::max(b.deepest, r.depth);
+          }
+          ++i;
+        }
+    });
+    ends.build();
+
+    std::vector<Bundle*>& active = b_.active;
+    active.clear();
+    for (Bundle& b : b_.bundles)
       if (b.p0 <= b.p1) active.push_back(&b);
 
     // Bands of bundles share no ray, so their threads write disjoint cuts; each marks its own cells.
-    workers = std::max<std::size_t>(1, std::min(workers, active.size() / kBundlesPerBand));
-    std::vector<std::vector<ScanBlock>> marked(workers);
-    runWorkers(workers, [&](std::size_t w) {
-      std::vector<Bundle*> band(active.begin() + std::ptrdiff_t(w * active.size() / workers),
-                                active.begin() + std::ptrdiff_t((w + 1) * active.size() / workers));
-      std::vector<std::uint8_t> state;
-      sweep(ends, band, state, marked[w]);
+    const std::size_t bands = std::max<std::size_t>(1, std::min(workers, active.size() / kBundlesPerBand));
+    if (b_.bands.size() < bands) b_.bands.resize(bands);
+    runWorkers(bands, [&](std::size_t w) {
+      RayBundler::Buffers::Band& band = b_.bands[w];
+      band.bundles.assign(active.begin() + std::ptrdiff_t(w * active.size() / bands),
+                          active.begin() + std::ptrdiff_t((w + 1) * active.size() / bands));
+      band.marked.clear();
+      sweep(ends, band.bundles, band.state, band.marked);
     });
-    for (const auto& m : marked) out_.blocks.insert(out_.blocks.end(), m.begin(), m.end());
+    for (std::size_t w = 0; w < bands; ++w)
+      b_.out.blocks.insert(b_.out.blocks.end(), b_.bands[w].marked.begin(), b_.bands[w].marked.end());
 
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      // A ray is cut in the last layer its bundle reached and it passes whole, short of its end's.
-      const double cut = std::min(bundles[of[i]].reached, lastLayerBefore(rays[i].depth));
-      if (cut > 0.0) out_.cuts[rays[i].ray] = (cut - margin_) / rays[i].axis;
-    }
+    // A thread for each part's rays: they have disjoint cuts.
+    runWorkers(face_.parts.size(), [&](std::size_t w) {
+      std::size_t i = 0;
+      for (std::size_t p = 0; p < w; ++p) i += face_.parts[p].rays.size();
+      for (const FaceRay& r : face_.parts[w].rays) {
+        // A ray is cut in the last layer its bundle reached and it passes whole, short of its end's.
+        const double cut = std::min(b_.bundles[b_.of[i++]].reached, lastLayerBefore(r.depth));
+        if (cut > 0.0) b_.out.cuts[r.ray] = (cut - margin_) / r.axis;
+      }
+    });
   }
 
  private:
@@ -266,7 +333,7 @@ class FaceSweep {
       active.resize(kept);
       if (active.empty()) return;
       const std::size_t nu = std::size_t(u1 - u0 + 1), nv = std::size_t(v1 - v0 + 1);
-      if (nu * nv > kLayerCellsPerRay * face_.rays.size() + 4096) return;
+      if (nu * nv > kLayerCellsPerRay * rays_ + 4096) return;
       state.assign(nu * nv, kUnknown);
 
       const double inv = 1.0 / mid;
@@ -343,17 +410,24 @@ class FaceSweep {
 
   static constexpr std::uint8_t kUnknown = 0, kCertain = 1, kUncertain = 2;
   double res_, inv_res_, margin_;
+  std::size_t rays_;
   double origin_[3];
   std::int64_t from_[3];
   const Face& face_;
-  RayBundles& out_;
+  RayBundler::Buffers& b_;
 };
 
 }  // namespace
 
-RayBundles bundleRays(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count,
-                      std::size_t workers) {
-  RayBundles out;
+RayBundler::RayBundler() : buffers_(std::make_unique<Buffers>()) {}
+RayBundler::~RayBundler() = default;
+
+const RayBundles& RayBundler::bundle(const CellGrid& grid, const float sensor[3], const float* ends,
+                                     std::size_t count, std::size_t workers) {
+  Buffers& b = *buffers_;
+  RayBundles& out = b.out;
+  out.cuts.clear();
+  out.blocks.clear();
   Key from;
   if (count == 0 || count > std::numeric_limits<std::uint32_t>::max() ||
       !grid.pointToKey(sensor[0], sensor[1], sensor[2], from))
@@ -372,31 +446,49 @@ RayBundles bundleRays(const CellGrid& grid, const float sensor[3], const float* 
   if (!any) return out;
 
   out.cuts.assign(count, 0.0);
-  Face faces[6];
-  for (unsigned f = 0; f < 6; ++f)
-    faces[f] = Face{f / 2, (f / 2 + 1) % 3, (f / 2 + 2) % 3, f % 2 ? -1 : 1, {}};
-  float origin[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < count; ++i) {
-    const float* end = ends + 3 * i;
-    // A ray ending in the sensor's cell is not walked; it ends in the first layer, so it neither has a
-    // cut nor counts for a cell.
-    const RaySetup ray = setupRay(grid, sensor, end);
-    if (!(ray.length > 0.0f)) continue;
-    std::copy(ray.origin, ray.origin + 3, origin);
-    const double d[3] = {ray.direction[0], ray.direction[1], ray.direction[2]};
-    const unsigned a = faceAxis(d);
-    const double along = std::fabs(d[a]);
-    const unsigned f = 2 * a + (d[a] < 0 ? 1 : 0);
-    if (!(along > 0.0) || !sample[f].worth) continue;
-    // The walk stops at the end's cell or at the ray's length, whichever its float ray reaches first.
-    const double sign = d[a] < 0 ? -1.0 : 1.0;
-    const double depth = std::min(along * double(ray.length),
-                                  sign * (double(end[a]) - grid.origin()[a] - double(ray.origin[a])));
-    Face& face = faces[f];
-    face.rays.push_back(FaceRay{d[face.u] / along, d[face.v] / along, depth, along, std::uint32_t(i)});
+  for (unsigned f = 0; f < 6; ++f) {
+    Face& face = b.faces[f];
+    face.axis = f / 2, face.u = (f / 2 + 1) % 3, face.v = (f / 2 + 2) % 3, face.sign = f % 2 ? -1 : 1;
+    face.parts.resize(workers);
   }
-  for (Face& face : faces)
-    if (!face.rays.empty()) FaceSweep(grid, from, origin, face, out).run(workers);
+  // The sensor relative to the grid, as setupRay gives it for every ray.
+  float origin[3];
+  for (int a = 0; a < 3; ++a) origin[a] = float(double(sensor[a]) - grid.origin()[a]);
+  runWorkers(workers, [&](std::size_t w) {
+    // Each thread fills a vector of its own: the faces' parts lie side by side, in one cache line.
+    FaceRays mine[6];
+    for (unsigned f = 0; f < 6; ++f) {
+      mine[f].rays.swap(b.faces[f].parts[w].rays);
+      mine[f].rays.clear();
+      mine[f].p0 = mine[f].q0 = std::numeric_limits<double>::max();
+      mine[f].p1 = mine[f].q1 = -std::numeric_limits<double>::max();
+    }
+    for (std::size_t i = w * count / workers, last = (w + 1) * count / workers; i < last; ++i) {
+      const float* end = ends + 3 * i;
+      // A ray ending in the sensor's cell is not walked; it ends in the first layer, so it neither has a
+      // cut nor counts for a cell.
+      const RaySetup ray = setupRay(grid, sensor, end);
+      if (!(ray.length > 0.0f)) continue;
+      const double d[3] = {ray.direction[0], ray.direction[1], ray.direction[2]};
+      const unsigned a = faceAxis(d);
+      const double along = std::fabs(d[a]);
+      const unsigned f = 2 * a + (d[a] < 0 ? 1 : 0);
+      if (!(along > 0.0) || !sample[f].worth) continue;
+      // The walk stops at the end's cell or at the ray's length, whichever its float ray reaches first.
+      const double sign = d[a] < 0 ? -1.0 : 1.0;
+      const double depth = std::min(along * double(ray.length),
+                                    sign * (double(end[a]) - grid.origin()[a] - double(ray.origin[a])));
+      const Face& face = b.faces[f];
+      FaceRays& to = mine[f];
+      const double p = d[face.u] / along, q = d[face.v] / along;
+      to.rays.push_back(FaceRay{p, q, depth, along, std::uint32_t(i)});
+      to.p0 = std::min(to.p0, p), to.p1 = std::max(to.p1, p);
+      to.q0 = std::min(to.q0, q), to.q1 = std::max(to.q1, q);
+    }
+    for (unsigned f = 0; f < 6; ++f) std::swap(mine[f], b.faces[f].parts[w]);
+  });
+  for (const Face& face : b.faces)
+    if (face.size() != 0) FaceSweep(grid, from, origin, face, b).run(workers);
   return out;
 }
 

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <pcl_fot/mapping/scan_insertion.h>
@@ -36,11 +37,28 @@ struct RayBundles {
 };
 
 /**
- * The bundles of the `count` rays from `sensor` to `ends` (xyz triples), as BlockRayWalker takes them,
- * swept on `workers` threads: the same cuts and cells for any count.
+ * Bundles scans' rays. It keeps its buffers, about 60 bytes a ray of the largest scan so far, for the next
+ * scan: a sequence of scans allocates them once, and threads write into memory that is already theirs.
  */
-RayBundles bundleRays(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count,
-                      std::size_t workers = 1);
+class RayBundler {
+ public:
+  RayBundler();
+  ~RayBundler();
+  RayBundler(const RayBundler&) = delete;
+  RayBundler& operator=(const RayBundler&) = delete;
+
+  /**
+   * The bundles of the `count` rays from `sensor` to `ends` (xyz triples), as BlockRayWalker takes them,
+   * swept on `workers` threads: the same cuts and cells for any count. Valid until the next call.
+   */
+  const RayBundles& bundle(const CellGrid& grid, const float sensor[3], const float* ends, std::size_t count,
+                           std::size_t workers = 1);
+
+  struct Buffers;  // the sweep's, in ray_bundles.cpp
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
+};
 
 }  // namespace detail
 }  // namespace fot

@@ -14,9 +14,11 @@ std::size_t slotOf(const std::uint32_t (&b)[3], unsigned bits) {
 
 }  // namespace
 
-ScanCells::ScanCells(std::size_t expected_blocks) {
+void ScanCells::reset(std::size_t expected_blocks) {
+  bits_ = 10;
   while (bits_ < 30 && (std::size_t(1) << bits_) < 2 * expected_blocks) ++bits_;
   slots_.assign(std::size_t(1) << bits_, 0);
+  blocks_.clear();
   blocks_.reserve(expected_blocks);
 }
 

@@ -23,7 +23,10 @@ class ScanCells {
  public:
   using Block = ScanBlock;
 
-  explicit ScanCells(std::size_t expected_blocks);
+  explicit ScanCells(std::size_t expected_blocks) { reset(expected_blocks); }
+
+  /** Empties it for a scan of about `expected_blocks` blocks; keeps its buffers. */
+  void reset(std::size_t expected_blocks);
 
   /** The index of a block, added if new: it stays valid while cells are added. */
   std::uint32_t index(const std::uint32_t (&block)[3]) {
@@ -36,7 +39,6 @@ class ScanCells {
   void join(const ScanCells& other);
 
   const std::vector<Block>& blocks() const { return blocks_; }
-  std::vector<Block> releaseBlocks() { return std::move(blocks_); }
 
  private:
   void cell(const Key& k, std::uint64_t Block::*field) {

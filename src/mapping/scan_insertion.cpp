@@ -109,9 +109,9 @@ struct ScanRays {
   std::vector<Key> endpoints;  // the cells of the rays that end at their point
 };
 
-/** The scan's points checked and made rays; bad points are counted in `stats` and left out. */
-ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* xyz, std::size_t count,
-                     std::size_t stride_bytes, const ScanOptions& options, ScanStats& stats) {
+/** The scan's points checked and made `rays`; bad points are counted in `stats` and left out. */
+void prepareRays(const CellGrid& grid, const float sensor[3], const float* xyz, std::size_t count,
+                 std::size_t stride_bytes, const ScanOptions& options, ScanStats& stats, ScanRays& rays) {
   if (!std::isfinite(sensor[0]) || !std::isfinite(sensor[1]) || !std::isfinite(sensor[2]))
     throw std::invalid_argument("pcl::fot::insertRays: the sensor position is not finite");
   Key sensor_key;
@@ -119,7 +119,9 @@ ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* x
     throw std::out_of_range("pcl::fot::insertRays: the sensor lies beyond the key range");
 
   const RegionCull cull(grid, sensor, sensor_key, options.region);
-  ScanRays rays;
+  rays.ends.clear();
+  rays.far.clear();
+  rays.endpoints.clear();
   rays.ends.reserve(3 * count);
   const auto addRay = [&](const float* end, const Key& end_key) {
     std::vector<float>& to = detail::BlockRayWalker::reaches(sensor_key, end_key) ? rays.ends : rays.far;
@@ -187,7 +189,6 @@ ScanRays prepareRays(const CellGrid& grid, const float sensor[3], const float* x
     if (!options.region || options.region->contains(key)) rays.endpoints.push_back(key);
   }
   stats.occupied = rays.endpoints.size();
-  return rays;
 }
 
 /**
@@ -327,7 +328,14 @@ void streamCells(Writer& writer, const CellGrid& grid, const float sensor[3], co
  */
 class CellGatherer {
  public:
-  explicit CellGatherer(std::size_t rays) : cells_(rays < 1024 ? 1024 : rays), recent_(kRecent) {}
+  CellGatherer() : cells_(0), recent_(kRecent) {}
+
+  /** Empties it for a share of about `rays` rays; keeps its buffers. */
+  void reset(std::size_t rays) {
+    cells_.reset(rays < 1024 ? 1024 : rays);
+    std::fill(recent_.begin(), recent_.end(), Recent{});
+    walked_ = skipped_ = 0;
+  }
 
   /** Walks `count` rays, their ends as xyz triples, each from its cut; counts the cells walked and skipped.
    */
@@ -381,17 +389,41 @@ class CellGatherer {
 };
 
 /**
+ * What inserting a scan allocates, kept for the calling thread's next scan: a sequence of scans allocates it
+ * once instead of touching fresh pages for every scan, which on two threads cost more than the second
+ * thread gave. A scan of far fewer points than the largest one so far lets it go.
+ */
+struct ScanScratch {
+  ScanRays rays;
+  detail::RayBundler bundler;
+  std::vector<std::unique_ptr<CellGatherer>> shares;  // one a worker
+  std::size_t points = 0;                             // the largest scan's since it was made
+};
+
+ScanScratch& scratchFor(std::size_t points) {
+  constexpr std::size_t kKeptAnyway = 1 << 16;
+  thread_local std::unique_ptr<ScanScratch> scratch;
+  if (!scratch || scratch->points > 4 * points + kKeptAnyway) scratch = std::make_unique<ScanScratch>();
+  scratch->points = std::max(scratch->points, points);
+  return *scratch;
+}
+
+/**
  * The scan's cells, each once, as OctoMap's computeUpdate collects them. The rays are cut into runs that
  * `workers` threads take in turn, each gathering the cells of its runs; their cells are then joined. A cell's
  * update depends only on whether some ray passes it or ends in it, so the cells are the same for any count.
  */
-detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const ScanRays& rays,
-                              const detail::RayBundles& bundles, std::size_t workers, ScanStats& stats) {
+const detail::ScanCells& gatherCells(const CellGrid& grid, const float sensor[3], ScanScratch& scratch,
+                                     const detail::RayBundles& bundles, std::size_t workers,
+                                     ScanStats& stats) {
+  const ScanRays& rays = scratch.rays;
   const std::size_t count = rays.ends.size() / 3, runs = (count + kRaysPerRun - 1) / kRaysPerRun;
-  std::vector<std::unique_ptr<CellGatherer>> shares(workers);
+  std::vector<std::unique_ptr<CellGatherer>>& shares = scratch.shares;
+  if (shares.size() < workers) shares.resize(workers);
   std::atomic<std::size_t> next_run{0};
   detail::runWorkers(workers, [&](std::size_t w) {
-    shares[w] = std::make_unique<CellGatherer>(count / workers);
+    if (!shares[w]) shares[w] = std::make_unique<CellGatherer>();
+    shares[w]->reset(count / workers);
     if (w == 0) shares[w]->pass(bundles.blocks);
     for (std::size_t r; (r = next_run.fetch_add(1, std::memory_order_relaxed)) < runs;) {
       const std::size_t begin = r * kRaysPerRun, n = std::min(kRaysPerRun, count - begin);
@@ -399,14 +431,11 @@ detail::ScanCells gatherCells(const CellGrid& grid, const float sensor[3], const
                       bundles.cuts.empty() ? nullptr : bundles.cuts.data() + begin, n);
     }
   });
-  for (const auto& share : shares) {
-    stats.ray_cells += share->walked();
-    stats.skipped_cells += share->skipped();
-  }
-  detail::ScanCells cells = std::move(shares[0]->cells());
-  for (std::size_t w = 1; w < workers; ++w) {
-    cells.join(shares[w]->cells());
-    shares[w].reset();
+  detail::ScanCells& cells = shares[0]->cells();
+  for (std::size_t w = 0; w < workers; ++w) {
+    stats.ray_cells += shares[w]->walked();
+    stats.skipped_cells += shares[w]->skipped();
+    if (w > 0) cells.join(shares[w]->cells());
   }
   for (std::size_t i = 0; i < rays.far.size(); i += 3)
     stats.ray_cells += traceSegment(grid, sensor, &rays.far[i], [&](const Key& k) { cells.pass(k); });
@@ -488,18 +517,20 @@ ScanStats insertRays(FastOctTree& map, const float sensor[3], const float* xyz, 
                      std::size_t stride_bytes, const ScanOptions& options) {
   const CellGrid& grid = map.getGrid();
   ScanStats stats;
-  const ScanRays rays = prepareRays(grid, sensor, xyz, count, stride_bytes, options, stats);
+  ScanScratch& scratch = scratchFor(count);
+  const ScanRays& rays = scratch.rays;
+  prepareRays(grid, sensor, xyz, count, stride_bytes, options, stats, scratch.rays);
   const bool log_odds = options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds;
   const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
-  const detail::RayBundles bundles =
-      detail::bundleRays(grid, sensor, rays.ends.data(), rays.ends.size() / 3, workers);
+  const detail::RayBundles& bundles =
+      scratch.bundler.bundle(grid, sensor, rays.ends.data(), rays.ends.size() / 3, workers);
   // A binary scan whose rays are walked whole is written as it is walked: no gathering.
   if (!log_odds && workers == 1 && !options.region && bundles.cuts.empty()) {
     TreeWriter writer(map, options.line_burst, count);
     streamCells(writer, grid, sensor, rays, stats);
     return stats;
   }
-  const detail::ScanCells cells = gatherCells(grid, sensor, rays, bundles, workers, stats);
+  const detail::ScanCells& cells = gatherCells(grid, sensor, scratch, bundles, workers, stats);
   stats.free_cells = applyScan(map, cells.blocks().data(), cells.blocks().size(), options);
   return stats;
 }
@@ -510,11 +541,13 @@ std::vector<ScanBlock> traceScan(const FastOctTree& map, const float sensor[3], 
   ScanStats own;
   ScanStats& s = stats ? *stats : own;
   s = ScanStats{};
-  const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, s);
+  ScanScratch& scratch = scratchFor(count);
+  const ScanRays& rays = scratch.rays;
+  prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, s, scratch.rays);
   const std::size_t workers = detail::workerCount(options.threads, rays.ends.size() / 3 / kRaysPerShare);
-  const detail::RayBundles bundles =
-      detail::bundleRays(map.getGrid(), sensor, rays.ends.data(), rays.ends.size() / 3, workers);
-  return gatherCells(map.getGrid(), sensor, rays, bundles, workers, s).releaseBlocks();
+  const detail::RayBundles& bundles =
+      scratch.bundler.bundle(map.getGrid(), sensor, rays.ends.data(), rays.ends.size() / 3, workers);
+  return gatherCells(map.getGrid(), sensor, scratch, bundles, workers, s).blocks();
 }
 
 std::uint64_t applyScan(FastOctTree& map, const ScanBlock* blocks, std::size_t count,
@@ -540,7 +573,8 @@ ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, 
   if (options.region)
     throw std::invalid_argument("pcl::fot::insertRays: the dense grid maps no region; map the whole grid");
   ScanStats stats;
-  const ScanRays rays = prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, stats);
+  ScanRays& rays = scratchFor(count).rays;
+  prepareRays(map.getGrid(), sensor, xyz, count, stride_bytes, options, stats, rays);
   GridWriter writer(map);
   streamCells(writer, map.getGrid(), sensor, rays, stats);
   return stats;

@@ -81,6 +81,10 @@ struct ScanStats {
  * reach it, as OctoMap's updateNode adds them (SensorModel): after the same scans every cell holds
  * OctoMap's float. The grid knows the binary rule only, and skips cells outside its cube.
  *
+ * The calling thread keeps the buffers a scan takes, in proportion to its points, for its next scan (into
+ * any map): a sequence of scans allocates them once. A scan of far fewer points than the largest one so far
+ * lets them go; traceScan shares them.
+ *
  * Throws std::invalid_argument for a non-finite sensor position, the LogOdds rule or a region on the grid,
  * and std::out_of_range for a sensor beyond the key range; bad points are skipped and counted.
  */
