@@ -96,7 +96,7 @@ make_plots() {
   if table '## Cell access' 'scan|FOT bytes|pcl::octree bytes|OctoMap bytes|grid bytes' \
     >"$tmp/mem_cells.tsv" &&
     table '## Ray-traced mapping' 'scan|ray-traced: FOT KB|ray-traced: OctoMap KB' >"$tmp/mem_rays.tsv" &&
-    table '## Multi-scan mapping' 'sequence|log-odds bytes|OctoMap bytes' >"$tmp/mem_multi.tsv"; then
+    table '## Multi-scan mapping' 'sequence|log-odds bytes as inserted|OctoMap bytes' >"$tmp/mem_multi.tsv"; then
     plot bench_memory.png memory.gp "$tmp/mem_cells.tsv" "$tmp/mem_rays.tsv" "$tmp/mem_multi.tsv"
   else
     skip bench_memory.png "memory table of the cell access, ray-traced or multi-scan mapping section"

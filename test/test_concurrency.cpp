@@ -313,6 +313,7 @@ FastOctTree mapOnThreads(const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr>&
   for (const auto& scan : scans) {
     const ScanStats s = insertScan(t, *scan, options);
     total.ray_cells += s.ray_cells;
+    total.skipped_cells += s.skipped_cells;
     total.free_cells += s.free_cells;
   }
   return t;
@@ -359,6 +360,24 @@ TEST(ConcurrencyOnRandomScans, ScanInsertionOnAnyThreadCountGivesTheSameMapWordF
   const FastOctTree one = mapOnThreads({scan}, UpdateRule::LogOdds, 2, stats);
   EXPECT_EQ(stats.free_cells, one.getFreeCount());
   EXPECT_LT(stats.free_cells, stats.ray_cells) << "rays cross cells near the sensor again and again";
+}
+
+TEST(ConcurrencyOnRandomScans, ADenseFrameInBundlesOnAnyThreadCountGivesTheSameMapWordForWord) {
+  // A depth camera's frame, dense enough that its rays are bundled: the threads split the bundles' setup,
+  // binning and sweep as well as the walks, unevenly at three.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> bump(0.0f, 0.4f);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr frame(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int y = 0; y < 180; ++y)
+    for (int x = 0; x < 240; ++x) {
+      const float dx = 1.1f * (float(x) / 239.0f - 0.5f), dy = 0.8f * (float(y) / 179.0f - 0.5f);
+      const float t = (x / 40 + y / 30) % 3 == 0 ? 2.0f - bump(rng) : 3.0f;
+      frame->push_back(pcl::PointXYZ(t * dx, t * dy, t));
+    }
+  ScanStats stats;
+  mapOnThreads({frame}, UpdateRule::LogOdds, 1, stats);
+  ASSERT_GT(stats.skipped_cells, stats.ray_cells / 2) << "the frame's rays are bundled";
+  expectSameMapOnAnyThreadCount({frame});
 }
 
 TEST_P(Concurrency, WorkerThreadsAreBoundedAndErrorsReachTheCaller) {

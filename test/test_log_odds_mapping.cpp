@@ -219,6 +219,50 @@ TEST(LogOddsMapping, AnObjectThatMovesAwayIsFreedByEvidenceEqualsOctoMap) {
   EXPECT_FLOAT_EQ(all.getLogOdds(box), SensorModel().hitLogOdds() + 3 * SensorModel().missLogOdds());
 }
 
+TEST(LogOddsMapping, ScansOverCubesOfEveryKindEqualTheirCellsUpdatedOneByOne) {
+  // A block that every ray of a scan passes is written as one cube where the map holds it inside one:
+  // settled occupied or free, of one value, unknown. The map must equal the same cells updated one by one.
+  FastOctTree start(0.05);
+  start.setUpdateRule(UpdateRule::LogOdds);
+  start.setBox(Key{8, -16, -16}, Key{23, 15, 15}, CellState::Occupied);
+  start.setBoxLogOdds(Key{24, -16, -16}, Key{39, 15, 15}, 0.85f);
+  start.setBox(Key{40, -16, -16}, Key{47, 15, 15}, CellState::Free);
+  start.setBoxLogOdds(Key{48, -7, -5}, Key{53, 6, 9}, -1.2f);  // not aligned to blocks
+  const float sensor[3] = {0.013f, 0.007f, -0.004f};
+  std::vector<float> xyz;  // a dense frame onto a wall at x = 4 m, beyond the cubes
+  for (int j = -100; j <= 100; ++j)
+    for (int i = -100; i <= 100; ++i) xyz.insert(xyz.end(), {4.0f, 0.02f * float(i), 0.02f * float(j)});
+  const SensorModel& model = start.getSensorModel();
+  for (UpdateRule rule : {UpdateRule::LogOdds, UpdateRule::Binary})
+    for (unsigned threads : {1u, 2u}) {
+      ScanOptions options;
+      options.rule = rule;
+      options.threads = threads;
+      FastOctTree scanned(start), by_cells(start);
+      insertRays(scanned, sensor, xyz.data(), xyz.size() / 3, 12, options);
+      std::uint64_t full = 0;
+      for (const ScanBlock& b : traceScan(start, sensor, xyz.data(), xyz.size() / 3, 12, options)) {
+        full += b.passed == ~std::uint64_t(0) && b.hit == 0;
+        for (unsigned bit = 0; bit < 64; ++bit) {
+          const Key k =
+              TreeCoord(4 * b.at[0] + (bit & 3u), 4 * b.at[1] + (bit >> 2 & 3u), 4 * b.at[2] + (bit >> 4))
+                  .key();
+          const bool hit = (b.hit >> bit) & 1u, passed = (b.passed >> bit) & 1u;
+          if (!hit && !passed) continue;
+          if (rule == UpdateRule::Binary)
+            by_cells.setCell(k, hit ? CellState::Occupied : CellState::Free);
+          else
+            by_cells.updateLogOdds(k, hit ? model.hitLogOdds() : model.missLogOdds());
+        }
+      }
+      EXPECT_GT(full, 100u) << "blocks every ray passes";
+      const FastOctTree::CanonicalPool a = scanned.canonicalPool(), b = by_cells.canonicalPool();
+      EXPECT_EQ(a.words, b.words) << threads << " threads";
+      ASSERT_EQ(a.values.size(), b.values.size());
+      EXPECT_EQ(std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)), 0);
+    }
+}
+
 TEST(LogOddsMapping, ForEachLogOddsGivesEveryKnownCellOnceWithItsValueAndCubesWhole) {
   const Sequence once = movingObject();
   Sequence scans = once;

@@ -45,7 +45,7 @@ unset ylabel
 set title "Ray-traced, one scan\n(paper Table IV)"
 plot ARG3 using ($0 + octomap):($3 / 1024.0):xtic(1) with points pt 9 ps 1.8 lc rgb octomap_colour, \
      '' using ($0 + fot):($2 / 1024.0) with points pt 7 ps 1.8 lc rgb fot_colour
-set title "Log-odds, several scans (the multi-scan\nmapping table; pcl_fot after shrinkToFit)"
+set title "Log-odds, several scans (the multi-scan\nmapping table; pcl_fot as inserted)"
 plot ARG4 using ($0 + octomap):(mib($3)):xtic(1) with points pt 9 ps 1.8 lc rgb octomap_colour, \
      '' using ($0 + fot):(mib($2)) with points pt 7 ps 1.8 lc rgb fot_colour
 unset multiplot

@@ -474,13 +474,15 @@ class RegionMask {
 /**
  * Writes the scan's cells a leaf at a time, in the order the rays first reached their blocks, which keeps
  * LineBurstAccess's paths short: `write(leaf key, miss mask, hit mask)` returns what
- * Accessor::setValidLeafCells returns. A block without endpoints changes nothing in a settled free cube,
- * so when the tree reports one around a leaf, the blocks after it that lie in that cube and have no
- * endpoint are passed over: the last visited node answers for them. Returns the cells marked free.
+ * Accessor::setValidLeafCells returns. A block whose every cell is missed goes to `accessor.missBlock`
+ * first, which writes it whole where the tree holds it as one cube. A block without endpoints changes
+ * nothing in a settled free cube, so when the tree reports one around a leaf, the blocks after it that lie
+ * in that cube and have no endpoint are passed over: the last visited node answers for them. Returns the
+ * cells marked free.
  */
 template <typename Write>
 std::uint64_t writeCells(const ScanBlock* blocks, std::size_t count, const RegionMask& region,
-                         Write&& write) {
+                         Accessor& accessor, bool log_odds, Write&& write) {
   std::uint32_t cube[3] = {0, 0, 0};
   unsigned cube_shift = 32;  // no cube yet
   std::uint64_t free = 0;
@@ -495,6 +497,16 @@ std::uint64_t writeCells(const ScanBlock* blocks, std::size_t count, const Regio
     if (b.hit == 0 && cube_shift < 32 &&
         ((b.at[0] ^ cube[0]) | (b.at[1] ^ cube[1]) | (b.at[2] ^ cube[2])) >> cube_shift == 0)
       continue;
+    if (miss == ~std::uint64_t(0)) {
+      const unsigned skip = accessor.missBlock(detail::block_cells::leafKey(b.at, 0), log_odds);
+      if (skip != Accessor::kByLeaves) {
+        if (skip >= 2) {  // a settled free cube of whole blocks: this one and those in it
+          cube_shift = skip - 2;
+          for (int a = 0; a < 3; ++a) cube[a] = b.at[a];
+        }
+        continue;
+      }
+    }
     for (std::uint64_t p = miss | b.hit; p != 0;) {
       const unsigned leaf = detail::block_cells::leafOf(detail::lowestBit(p));
       const unsigned skip =
@@ -555,14 +567,16 @@ std::uint64_t applyScan(FastOctTree& map, const ScanBlock* blocks, std::size_t c
   Accessor accessor(map, options.line_burst);
   const RegionMask region(options.region);
   if (options.rule.value_or(map.getUpdateRule()) == UpdateRule::LogOdds)
-    return writeCells(blocks, count, region, [&](const Key& k, std::uint32_t miss, std::uint32_t hit) {
-      return accessor.updateLeaf(k, miss, hit);
-    });
-  return writeCells(blocks, count, region, [&](const Key& k, std::uint32_t free, std::uint32_t occupied) {
-    const unsigned skip = free ? accessor.setValidLeafCells(k, free, CellState::Free) : 0;
-    if (occupied) accessor.setValidLeafCells(k, occupied, CellState::Occupied);
-    return skip;
-  });
+    return writeCells(blocks, count, region, accessor, true,
+                      [&](const Key& k, std::uint32_t miss, std::uint32_t hit) {
+                        return accessor.updateLeaf(k, miss, hit);
+                      });
+  return writeCells(blocks, count, region, accessor, false,
+                    [&](const Key& k, std::uint32_t free, std::uint32_t occupied) {
+                      const unsigned skip = free ? accessor.setValidLeafCells(k, free, CellState::Free) : 0;
+                      if (occupied) accessor.setValidLeafCells(k, occupied, CellState::Occupied);
+                      return skip;
+                    });
 }
 
 ScanStats insertRays(FastOccMesh& map, const float sensor[3], const float* xyz, std::size_t count,

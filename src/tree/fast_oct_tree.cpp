@@ -374,29 +374,28 @@ NodeWord FastOctTree::foldedBlock(std::size_t first) const {
   return settled && value != 0 ? 0 : folded | value;
 }
 
+NodeWord FastOctTree::foldBlock(std::size_t parent_at, std::size_t first) {
+  const NodeWord folded = foldedBlock(first);
+  if (folded == 0) return 0;
+  for (unsigned o = 0; o < 8; ++o) value_leaves_ -= node::hasValues(words_[first + o]);
+  value_leaves_ += node::hasValues(folded);
+  freeBlock(std::uint32_t(first / 8));
+  words_[parent_at] = folded;
+  ++version_;
+  return folded;
+}
+
 void FastOctTree::foldSubtree(std::size_t at) {
   const NodeWord w = words_[at];
   if (node::isBitmap(w)) return;
   for (unsigned o = 0; o < 8; ++o) foldSubtree(node::childOffset(w, o));
-  const NodeWord folded = foldedBlock(node::childBase(w));
-  if (folded == 0) return;
-  for (unsigned o = 0; o < 8; ++o) value_leaves_ -= node::hasValues(words_[node::childOffset(w, o)]);
-  value_leaves_ += node::hasValues(folded);
-  freeBlock(node::block(w));
-  words_[at] = folded;
-  ++version_;
+  foldBlock(at, node::childBase(w));
 }
 
 unsigned FastOctTree::collapseFrom(const std::size_t* path, unsigned level) {
   while (level < root_level_) {
-    const std::size_t first = path[level] & ~std::size_t(7);
-    const NodeWord parent = foldedBlock(first);
+    const NodeWord parent = foldBlock(path[level + 1], path[level] & ~std::size_t(7));
     if (parent == 0) return level;
-    for (unsigned o = 0; o < 8; ++o) value_leaves_ -= node::hasValues(words_[first + o]);
-    value_leaves_ += node::hasValues(parent);
-    words_[path[level + 1]] = parent;
-    freeBlock(std::uint32_t(first / 8));
-    ++version_;
     ++level;
     if (!node::isUniform(parent) && !node::isValueUniform(parent)) return level;
   }

@@ -64,6 +64,7 @@ class BasicAccessor {
    */
   unsigned setValidLeafCells(const Key& key, std::uint32_t mask, CellState state) {
     static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    if (mask == 0) return 0;
     const TreeCoord c(key);
     const std::uint32_t x = c[0], y = c[1], z = c[2];
     if (!locate(x, y, z)) {
@@ -71,28 +72,22 @@ class BasicAccessor {
       tree_->growToCover(x, y, z, 0);
       locate(x, y, z);
     }
-    const NodeWord w = tree_->words()[path_[bottom_]];
-    if (bottom_ == 1) {
-      if (node::hasValues(w)) {
-        bottom_ = tree_->setLeafStates(path_, mask, state);
-        version_ = tree_->structureVersion();
-        return 0;
-      }
-      const NodeWord updated = node::withStates(w, mask, state);
-      if (updated == w) return line_burst_ && node::isUniform(w) ? 1 : 0;
-      writeLeaf(updated);
-      return 0;
+    NodeWord w = tree_->words()[path_[bottom_]];
+    if (bottom_ > 1) {
+      if (node::octantWord(w, c.octant(bottom_)) == node::uniform(state))
+        return line_burst_ ? bottom_ - 1 : 0;
+      tree_->expandTo(path_, bottom_, x, y, z);  // the cube holds another state: some cell changes
+      bottom_ = 1;
+      w = tree_->words()[path_[1]];
     }
-    if (node::octantWord(w, c.octant(bottom_)) == node::uniform(state)) return line_burst_ ? bottom_ - 1 : 0;
-    tree_->expandTo(path_, bottom_, x, y, z);
-    bottom_ = 1;
-    const NodeWord leaf = tree_->words()[path_[1]];
-    if (node::hasValues(leaf)) {  // a cube of one value, split down to this leaf
+    if (node::hasValues(w)) {  // values, or a cube of one value split down to this leaf
       bottom_ = tree_->setLeafStates(path_, mask, state);
       version_ = tree_->structureVersion();
       return 0;
     }
-    writeLeaf(node::withStates(leaf, mask, state));
+    const NodeWord updated = node::withStates(w, mask, state);
+    if (updated == w) return line_burst_ && node::isUniform(w) ? 1 : 0;
+    writeLeaf(updated);
     return 0;
   }
 
@@ -131,6 +126,32 @@ class BasicAccessor {
     for (unsigned o = 0; o < 8; ++o) update[o] = (hit >> o) & 1u ? m.hitLogOdds() : m.missLogOdds();
     bottom_ = tree_->updateLeaf(path_, miss | hit, update);
     version_ = tree_->structureVersion();
+    return 0;
+  }
+
+  /** missBlock's answer when the block holds more than one value: nothing was written. */
+  static constexpr unsigned kByLeaves = ~0u;
+
+  /**
+   * One scan's miss for each of the 64 cells of the 4×4×4 block whose lowest cell is `key` (a valid key,
+   * tree coordinates multiples of 4): by OctoMap's rule, or made free (`log_odds` false). Where the tree
+   * holds the block inside one cube (settled, unknown or of one value), its cells change alike and the
+   * block is written as one cube, not leaf by leaf. Returns what updateLeaf() returns, or kByLeaves.
+   */
+  unsigned missBlock(const Key& key, bool log_odds) {
+    static_assert(!std::is_const<TreeT>::value, "a ConstAccessor cannot write");
+    const TreeCoord c(key);
+    const NodeWord w = reach(c[0], c[1], c[2]);
+    if (bottom_ < 3) return kByLeaves;
+    if (!node::hasValues(w) && node::state(w, c.octant(bottom_)) == CellState::Free)
+      return line_burst_ ? bottom_ - 1 : 0;
+    if (log_odds) {
+      float v = tree_->leafValue(path_[bottom_], c.octant(bottom_));
+      tree_->getSensorModel().updateNode(v, tree_->getSensorModel().missLogOdds());
+      tree_->setCubeLogOdds(c, 2, v);
+    } else {
+      tree_->setCube(c, 2, CellState::Free);
+    }
     return 0;
   }
 

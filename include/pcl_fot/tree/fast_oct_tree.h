@@ -340,6 +340,11 @@ class FastOctTree {
   /** The word the block at pool offset `first` folds into: all uniform, or cubes of one value and
    * unknown ones; 0 when it does not fold. */
   NodeWord foldedBlock(std::size_t first) const;
+  /**
+   * Folds the block at pool offset `first` into its parent's word at `parent_at`, if it folds
+   * (foldedBlock): keeps the counts and frees the block. Returns the parent's new word, or 0.
+   */
+  NodeWord foldBlock(std::size_t parent_at, std::size_t first);
   /** Folds, below the word at pool offset `at`, every block that folds (a pool read from a file). */
   void foldSubtree(std::size_t at);
 
