@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include <pcl_fot/mapping/scan_insertion.h>
+#include <pcl_fot/tree/accessor.h>
 #include <pcl_fot/tree/fast_oct_tree.h>
 
 #include "bench_util.h"
@@ -74,18 +75,39 @@ bool samePool(const pcl::fot::FastOctTree& a, const pcl::fot::FastOctTree& b) {
           std::memcmp(pa.values.data(), pb.values.data(), pa.values.size() * sizeof(float)) == 0);
 }
 
+/** Every cell OctoMap knows holds OctoMap's log-odds in `ours`, bit for bit, and ours knows no other. */
+bool sameAsOctoMap(const octomap::OcTree& om, const pcl::fot::FastOctTree& ours) {
+  pcl::fot::ConstAccessor cells(ours);
+  std::uint64_t known = 0;
+  for (auto it = om.begin_leafs(); it != om.end_leafs(); ++it) {
+    const int side = 1 << (16 - it.getDepth());
+    const octomap::OcTreeKey base = it.getIndexKey();  // OctoMap's key: ours + 32768
+    const float want = it->getLogOdds();
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+          const float got = cells.getLogOdds(
+              pcl::fot::Key{int(base[0]) - 32768 + x, int(base[1]) - 32768 + y, int(base[2]) - 32768 + z});
+          if (std::memcmp(&got, &want, sizeof got) != 0) return false;
+        }
+    known += std::uint64_t(side) * side * side;
+  }
+  return known == ours.getFreeCount() + ours.getOccupiedCount();
+}
+
 }  // namespace
 
 std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
   Table table({"sequence", "scans", "cells passed / distinct", "stepped / distinct", "OctoMap ms",
                "log-odds ms", "speed-up", "log-odds 2 threads ms", "2 threads / 1", "binary ms",
-               "binary 2 threads ms", "OctoMap bytes", "log-odds bytes as inserted", "after shrinkToFit",
-               "memory ratio as inserted", "after shrinkToFit", "unsettled cells", "equal"});
+               "binary 2 threads ms", "bit for bit OctoMap", "OctoMap bytes", "log-odds bytes as inserted",
+               "after shrinkToFit", "memory ratio as inserted", "after shrinkToFit", "unsettled cells",
+               "equal"});
   for (const Sequence& seq : sequences(scans)) {
     std::vector<double> t_octomap, t_log[2], t_binary[2];
     std::size_t octomap_bytes = 0, inserted_bytes = 0, our_bytes = 0;
     std::uint64_t unsettled = 0, walked = 0, skipped = 0, distinct = 0;
-    bool equal = true;
+    bool equal = true, exact = true;
     for (int r = 0; r < repeats; ++r) {
       octomap::OcTree om(seq.resolution);
       t_octomap.push_back(timeOnce([&] {
@@ -115,6 +137,7 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
         }
         equal = equal && samePool(maps[0], maps[1]);
         if (rule == pcl::fot::UpdateRule::Binary) continue;
+        if (r == 0) exact = sameAsOctoMap(om, maps[0]);
         inserted_bytes = maps[0].getMemoryBytes();
         maps[0].shrinkToFit();
         our_bytes = maps[0].getMemoryBytes();
@@ -127,7 +150,7 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
                format("%.1f", double(walked - skipped) / double(distinct)), format("%.1f", om_ms),
                format("%.1f", log_ms), format("%.1f×", om_ms / log_ms), format("%.1f", log2_ms),
                format("%.2f×", log_ms / log2_ms), format("%.1f", 1e3 * median(t_binary[0])),
-               format("%.1f", 1e3 * median(t_binary[1])), std::to_string(octomap_bytes),
+               format("%.1f", 1e3 * median(t_binary[1])), exact ? "yes" : "NO", std::to_string(octomap_bytes),
                std::to_string(inserted_bytes), std::to_string(our_bytes),
                format("1/%.1f", double(octomap_bytes) / double(inserted_bytes)),
                format("1/%.1f", double(octomap_bytes) / double(our_bytes)), std::to_string(unsettled),
@@ -140,7 +163,9 @@ std::string benchMultiScan(const std::vector<BenchScan>& scans, int repeats) {
          "discretize, single-threaded as Debian builds it) next to `insertRays` by the log-odds rule, which "
          "gives every cell OctoMap's float bit for bit (`test_log_odds_mapping`), and by the binary rule, "
          "each "
-         "on one thread and on two (`ScanOptions::threads`). *Equal*: the maps built on one and on two "
+         "on one thread and on two (`ScanOptions::threads`). *Bit for bit OctoMap*: every cell OctoMap's map "
+         "knows holds its log-odds, bits compared, in ours (one thread, first repetition), and ours knows no "
+         "other cell. *Equal*: the maps built on one and on two "
          "threads have the same canonical pool, word for word and value for value. *Cells passed / "
          "distinct*: the cells the rays pass, summed over rays, against the distinct cells the scans mark "
          "free (`ScanStats::ray_cells` and `free_cells`): how often a cell is passed again within a scan. "
