@@ -37,8 +37,9 @@ struct RayBundles {
 };
 
 /**
- * Bundles scans' rays. It keeps its buffers, about 60 bytes a ray of the largest scan so far, for the next
- * scan: a sequence of scans allocates them once, and threads write into memory that is already theirs.
+ * Bundles scans' rays. It keeps its buffers for the next scan, about 70 bytes a ray of the largest scan so
+ * far (its face entry 40, its cut 8, its bundle's index 4, its share of the bins about 21): a sequence of
+ * scans allocates them once, and threads write into memory that is already theirs.
  */
 class RayBundler {
  public:
